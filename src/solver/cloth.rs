@@ -1,0 +1,233 @@
+//! The cloth model of §3.1: a woven grid of oriented surface elements.
+//!
+//! A cloth is `weft × warp` particles laid on a rectangle. Particle `(i, j)`
+//! (column `i` along the weft, row `j` along the warp) has index `j * weft + i`.
+//! Each particle is a small thin disc whose area is the cloth's area shared
+//! equally, so every particle has the same mass `m = ρ_A · W · H / N` and the
+//! same disc inertia. The disc radius `r` satisfies `π r² = W · H / N`; its
+//! moment of inertia about an in-plane axis is `I = m r² / 4` (about the
+//! normal it is `m r² / 2`, which no corrective rotation uses, because turning
+//! about the normal does not move the normal).
+//!
+//! State is kept as structure of arrays ([`ClothState`]) so that the update
+//! loop streams through memory and constraint batches touch plain slices.
+
+use glam::{Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::params::{ParamError, check_range};
+
+/// Smallest and largest grid side, in particles.
+pub const MIN_RESOLUTION: u32 = 2;
+/// Largest grid side, in particles.
+pub const MAX_RESOLUTION: u32 = 512;
+
+/// What a cloth is made of and how it is laid out at rest.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ClothSpec {
+    /// Size along the weft (local X), in metres.
+    pub width: f32,
+    /// Size along the warp (local Y), in metres.
+    pub height: f32,
+    /// Particles along the weft, in `[2, 512]`.
+    pub weft: u32,
+    /// Particles along the warp, in `[2, 512]`.
+    pub warp: u32,
+    /// Areal density `ρ_A`, in kg/m².
+    pub density: f32,
+    /// Thickness of the cloth, in metres; colliders keep particles half of it away.
+    pub thickness: f32,
+    /// Position of particle `(0, 0)` at rest, in metres.
+    pub origin: Vec3,
+    /// Orientation of the rest layout: the grid spans local X (weft) and local
+    /// Y (warp); local +Z is the rest normal.
+    pub rotation: Quat,
+}
+
+impl Default for ClothSpec {
+    fn default() -> Self {
+        Self {
+            width: 1.0,
+            height: 1.0,
+            weft: 32,
+            warp: 32,
+            density: 0.2,
+            thickness: 0.004,
+            origin: Vec3::ZERO,
+            rotation: Quat::IDENTITY,
+        }
+    }
+}
+
+impl ClothSpec {
+    /// Checks sizes, resolution and material against their ranges.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        check_range(
+            "cloth.width",
+            self.width,
+            1e-3,
+            1e3,
+            false,
+            "0.001 ≤ width ≤ 1000 m",
+        )?;
+        check_range(
+            "cloth.height",
+            self.height,
+            1e-3,
+            1e3,
+            false,
+            "0.001 ≤ height ≤ 1000 m",
+        )?;
+        for (name, n) in [("cloth.weft", self.weft), ("cloth.warp", self.warp)] {
+            if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&n) {
+                return Err(ParamError {
+                    name,
+                    value: n.to_string(),
+                    problem: "is out of range",
+                    range: "2 ≤ particles per side ≤ 512",
+                });
+            }
+        }
+        check_range(
+            "cloth.density",
+            self.density,
+            1e-4,
+            1e3,
+            false,
+            "0.0001 ≤ density ≤ 1000 kg/m²",
+        )?;
+        check_range(
+            "cloth.thickness",
+            self.thickness,
+            0.0,
+            0.1,
+            false,
+            "0 ≤ thickness ≤ 0.1 m",
+        )?;
+        for (name, v) in [
+            ("cloth.origin", self.origin.to_array()),
+            (
+                "cloth.rotation",
+                [self.rotation.x, self.rotation.y, self.rotation.z],
+            ),
+        ] {
+            if v.iter().any(|c| !c.is_finite() || c.abs() > 1e6) {
+                return Err(ParamError {
+                    name,
+                    value: format!("{v:?}"),
+                    problem: "is not finite",
+                    range: "finite components with magnitude ≤ 1e6",
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.weft as usize * self.warp as usize
+    }
+
+    /// Whether the cloth has no particles (never, once validated).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Index of particle `(i, j)`.
+    pub fn index(&self, i: u32, j: u32) -> usize {
+        (j * self.weft + i) as usize
+    }
+
+    /// Rest spacing along the weft and along the warp, in metres.
+    pub fn spacing(&self) -> (f32, f32) {
+        (
+            self.width / (self.weft - 1) as f32,
+            self.height / (self.warp - 1) as f32,
+        )
+    }
+
+    /// Mass of one particle, in kg.
+    pub fn particle_mass(&self) -> f32 {
+        self.density * self.width * self.height / self.len() as f32
+    }
+
+    /// In-plane moment of inertia of one particle's disc, in kg·m².
+    pub fn particle_inertia(&self) -> f32 {
+        let area = self.width * self.height / self.len() as f32;
+        let r2 = area / std::f32::consts::PI;
+        self.particle_mass() * r2 / 4.0
+    }
+
+    /// Rest position of particle `(i, j)`.
+    pub fn rest_position(&self, i: u32, j: u32) -> Vec3 {
+        let (dx, dy) = self.spacing();
+        self.origin + self.rotation * Vec3::new(i as f32 * dx, j as f32 * dy, 0.0)
+    }
+}
+
+/// The dynamic state of every particle, as structure of arrays.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ClothState {
+    /// Position `x(t)`.
+    pub position: Vec<Vec3>,
+    /// Position one substep ago, `x(t − Δt)`; `x − x_prev` is the Störmer velocity.
+    pub prev_position: Vec<Vec3>,
+    /// Orientation; the element's normal is its local +Z.
+    pub orientation: Vec<Quat>,
+    /// Orientation one substep ago.
+    pub prev_orientation: Vec<Quat>,
+}
+
+impl ClothState {
+    /// The rest layout of `spec`, at rest.
+    pub fn at_rest(spec: &ClothSpec) -> Self {
+        let mut position = Vec::with_capacity(spec.len());
+        for j in 0..spec.warp {
+            for i in 0..spec.weft {
+                position.push(spec.rest_position(i, j));
+            }
+        }
+        let orientation = vec![spec.rotation.normalize(); spec.len()];
+        Self {
+            prev_position: position.clone(),
+            position,
+            prev_orientation: orientation.clone(),
+            orientation,
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+
+    /// The normal of particle `i` (local +Z of its orientation).
+    #[inline]
+    pub fn normal(&self, i: usize) -> Vec3 {
+        normal_of(self.orientation[i])
+    }
+
+    /// Copies `other` into `self` without reallocating.
+    pub fn copy_from(&mut self, other: &ClothState) {
+        self.position.clone_from(&other.position);
+        self.prev_position.clone_from(&other.prev_position);
+        self.orientation.clone_from(&other.orientation);
+        self.prev_orientation.clone_from(&other.prev_orientation);
+    }
+}
+
+/// The local +Z axis of a unit quaternion, without a full rotation.
+#[inline]
+pub fn normal_of(q: Quat) -> Vec3 {
+    Vec3::new(
+        2.0 * (q.x * q.z + q.w * q.y),
+        2.0 * (q.y * q.z - q.w * q.x),
+        1.0 - 2.0 * (q.x * q.x + q.y * q.y),
+    )
+}

@@ -1,0 +1,179 @@
+//! What the solver reports about a step, on request.
+//!
+//! With diagnostics on, a step records, per family, the corrections `δx` and
+//! `δθ` (axis × angle) it applied to each particle in its last adjust phase,
+//! the largest single forced rotation, the residual violation (max and RMS),
+//! and wall times. With diagnostics off none of this is computed: the
+//! projections are compiled with a recorder that does nothing.
+//!
+//! The measurement functions here ([`violation`], [`max_strain`],
+//! [`kinetic_energy`]) are plain functions of a state, used by diagnostics and
+//! by tests alike.
+
+use std::time::Duration;
+
+use glam::Vec3;
+
+use super::{
+    Family,
+    cloth::ClothState,
+    constraints::{Recorder, curvature, normality, planarity, stretch},
+    topology::{Batched, Topology},
+};
+
+/// Max and RMS of a family's violation over its pairs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Violation {
+    /// Largest violation.
+    pub max: f32,
+    /// Root mean square of the violations.
+    pub rms: f32,
+}
+
+/// What one family did in the last adjust phase.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FamilyDiagnostics {
+    /// Total translation applied to each particle.
+    pub dx: Vec<Vec3>,
+    /// Total rotation applied to each particle, as axis × angle (radians).
+    pub dtheta: Vec<Vec3>,
+    /// Largest single forced rotation, in radians (never above `Φ`).
+    pub max_rotation: f32,
+    /// Violation after the step.
+    pub violation: Violation,
+    /// Wall time spent projecting this family during the step.
+    pub time: Duration,
+}
+
+/// Wall times of one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// The update phase.
+    pub update: Duration,
+    /// Collider projection and friction.
+    pub collisions: Duration,
+    /// The whole step.
+    pub total: Duration,
+}
+
+/// Everything a step reports when diagnostics are on.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Per family, indexed by [`Family::index`].
+    pub families: [FamilyDiagnostics; 4],
+    /// Largest strain of a weft or warp edge.
+    pub max_strain: f32,
+    /// Kinetic energy of the free particles, in joules.
+    pub kinetic_energy: f32,
+    /// Wall times.
+    pub timings: Timings,
+}
+
+impl Diagnostics {
+    /// Empty diagnostics for `n` particles.
+    pub fn new(n: usize) -> Self {
+        let mut d = Self::default();
+        for f in &mut d.families {
+            f.dx = vec![Vec3::ZERO; n];
+            f.dtheta = vec![Vec3::ZERO; n];
+        }
+        d
+    }
+
+    /// One family's diagnostics.
+    pub fn family(&self, family: Family) -> &FamilyDiagnostics {
+        &self.families[family.index()]
+    }
+
+    /// Clears per-particle corrections before an adjust phase.
+    pub(crate) fn clear_corrections(&mut self) {
+        for f in &mut self.families {
+            f.dx.fill(Vec3::ZERO);
+            f.dtheta.fill(Vec3::ZERO);
+        }
+    }
+
+    /// Clears the per-step figures before a step.
+    pub(crate) fn clear_step(&mut self) {
+        for f in &mut self.families {
+            f.max_rotation = 0.0;
+            f.time = Duration::ZERO;
+        }
+        self.timings = Timings::default();
+    }
+}
+
+/// Records one family's corrections into its diagnostics.
+pub(crate) struct FamilyRecorder<'a>(pub &'a mut FamilyDiagnostics);
+
+impl Recorder for FamilyRecorder<'_> {
+    const ON: bool = true;
+    #[inline]
+    fn moved(&mut self, i: usize, dx: Vec3) {
+        self.0.dx[i] += dx;
+    }
+    #[inline]
+    fn turned(&mut self, i: usize, axis_angle: Vec3) {
+        self.0.dtheta[i] += axis_angle;
+        self.0.max_rotation = self.0.max_rotation.max(axis_angle.length());
+    }
+}
+
+fn stats<T: Copy>(sets: &[&Batched<T>], f: impl Fn(T) -> f32) -> Violation {
+    let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
+    for set in sets {
+        for &p in &set.items {
+            let v = f(p);
+            max = max.max(v);
+            sum += (v as f64) * (v as f64);
+            n += 1;
+        }
+    }
+    Violation {
+        max,
+        rms: if n == 0 {
+            0.0
+        } else {
+            (sum / n as f64).sqrt() as f32
+        },
+    }
+}
+
+/// The violation of one family over the pairs it constrains.
+pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Violation {
+    let x = &state.position;
+    let normal = |i| state.normal(i);
+    match family {
+        Family::Stretch => stats(&[&topology.structural, &topology.shear], |p| {
+            stretch::violation(x, p)
+        }),
+        Family::Planarity => stats(&[&topology.structural], |p| {
+            planarity::violation(x, normal, p)
+        }),
+        Family::Normality => stats(&[&topology.structural, &topology.shear], |p| {
+            normality::violation(normal, p)
+        }),
+        Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, normal, p)),
+    }
+}
+
+/// The largest strain (elongation `(|s| − L) / L`, 0 when compressed) of a
+/// weft or warp edge. Compression is left out: cloth buckles rather than
+/// compress, so a folded edge is not a stretched one.
+pub fn max_strain(state: &ClothState, topology: &Topology) -> f32 {
+    let x = &state.position;
+    topology.structural.items.iter().fold(0.0, |m, p| {
+        let len = x[p.b as usize].distance(x[p.a as usize]);
+        m.max((len - p.rest) / p.rest)
+    })
+}
+
+/// Kinetic energy `Σ ½ m |Δx / Δt|²` of the particles with mass, for substep `dt`.
+pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
+    let mut e = 0.0f64;
+    for (i, &m) in mass.iter().enumerate() {
+        let v = (state.position[i] - state.prev_position[i]) / dt;
+        e += 0.5 * m as f64 * v.length_squared() as f64;
+    }
+    e as f32
+}

@@ -1,0 +1,620 @@
+//! The oriented-particle cloth solver of Bae, Baek, Lee and Ryu.
+//!
+//! A cloth is a grid of small surface elements: particles with mass, inertia
+//! and an orientation whose local +Z is the element's normal ([`cloth`]).
+//! A step of length `Δt` runs `substeps` substeps of `Δt / substeps`, each in
+//! two phases:
+//!
+//! 1. **update** ([`update`]): every particle moves on its own by Störmer
+//!    integration with damping `k`, under gravity and wind on its face;
+//!    driven particles follow their attachment exactly.
+//! 2. **adjust** ([`constraints`]): `iterations` sweeps over four families of
+//!    geometric constraints between neighbours (stretch, planarity,
+//!    normality, curvature), each weighted by its `λ`. A particle's
+//!    correction is the weighted sum of what each family asks; rotations are
+//!    shaped by Eq. 3 ([`forced_rotation`]). Colliders are projected after
+//!    each sweep, friction once at the end ([`collision`]).
+//!
+//! Constraints are solved Gauss–Seidel, in graph-colour batches ([`topology`]):
+//! pairs in one colour share no particle, so the result is the same whatever
+//! order (or thread) projects them. The solver knows nothing of telemetry or
+//! UI; [`diagnostics`] exposes what they need.
+//!
+//! ```
+//! use weft::solver::{ClothSpec, Environment, Params, Pose, Solver};
+//!
+//! let spec = ClothSpec { weft: 8, warp: 8, ..ClothSpec::default() };
+//! let mut solver = Solver::new(spec, Params::default(), &[Pose::IDENTITY]).unwrap();
+//! solver.attach(spec.index(0, 7), 0);
+//! solver.attach(spec.index(7, 7), 0);
+//! for _ in 0..60 {
+//!     solver.step(&Environment::default(), &[Pose::IDENTITY]).unwrap();
+//! }
+//! assert!(solver.state().position[0].z < -0.1); // the free corner fell
+//! ```
+
+pub mod cloth;
+pub mod collision;
+pub mod constraints;
+pub mod diagnostics;
+pub mod forced_rotation;
+pub mod params;
+pub mod topology;
+pub mod update;
+
+use std::time::Instant;
+
+pub use cloth::{ClothSpec, ClothState};
+pub use collision::{Collider, Pose, Shape};
+pub use diagnostics::{Diagnostics, Violation};
+pub use forced_rotation::ForcedRotation;
+pub use params::{ParamError, Params, Weights, Width};
+pub use topology::Topology;
+pub use update::Environment;
+
+use glam::Vec3;
+
+use collision::Contact;
+use constraints::{NoRecord, Particles, Recorder, stretch};
+use diagnostics::FamilyRecorder;
+
+/// The four constraint families of the adjust phase.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Family {
+    /// Length limit on weft, warp and shear edges.
+    Stretch,
+    /// Co-planarity of neighbours.
+    Planarity,
+    /// Co-normality of neighbours.
+    Normality,
+    /// Co-circularity of bend pairs.
+    Curvature,
+}
+
+impl Family {
+    /// All families, in the order the adjust phase projects them. The length
+    /// limit comes last, so it has the last word in every sweep: real cloth
+    /// hardly stretches, whatever the shape constraints ask.
+    pub const ALL: [Family; 4] = [
+        Family::Planarity,
+        Family::Normality,
+        Family::Curvature,
+        Family::Stretch,
+    ];
+
+    /// A stable index, `0..4`, for per-family arrays.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Lower-case name, as used in presets and entity paths.
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Stretch => "stretch",
+            Family::Planarity => "planarity",
+            Family::Normality => "normality",
+            Family::Curvature => "curvature",
+        }
+    }
+}
+
+/// A particle that follows a body exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attachment {
+    /// The driven particle.
+    pub particle: usize,
+    /// The body it follows.
+    pub body: usize,
+    /// Its pose in the body's frame.
+    pub local: Pose,
+}
+
+/// A step that could not be completed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// The state turned non-finite; the last good state was kept.
+    #[error(
+        "step {step}: particle {particle} has a non-finite {quantity} {value}; the last good state was kept"
+    )]
+    NonFinite {
+        /// Number of the failed step (the first step is 1).
+        step: u64,
+        /// The first particle found non-finite.
+        particle: usize,
+        /// `position` or `orientation`.
+        quantity: &'static str,
+        /// The offending value, as text.
+        value: String,
+    },
+    /// The step was given the wrong number of body poses.
+    #[error("step {step}: {given} body poses given, the scene has {expected}")]
+    Bodies {
+        /// Number of the failed step.
+        step: u64,
+        /// Poses given.
+        given: usize,
+        /// Poses expected.
+        expected: usize,
+    },
+}
+
+/// Errors building a solver.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SetupError {
+    /// A parameter or cloth property is out of range.
+    #[error(transparent)]
+    Param(#[from] ParamError),
+    /// An attachment or collider names a body that does not exist.
+    #[error("{what} refers to body {body}, but there are {bodies} bodies")]
+    NoSuchBody {
+        /// What refers to it.
+        what: String,
+        /// The body index.
+        body: usize,
+        /// The number of bodies.
+        bodies: usize,
+    },
+    /// An attachment names a particle outside the cloth.
+    #[error("attachment refers to particle {particle}, but the cloth has {particles}")]
+    NoSuchParticle {
+        /// The particle index.
+        particle: usize,
+        /// The number of particles.
+        particles: usize,
+    },
+}
+
+/// A cloth and everything needed to step it.
+#[derive(Clone, Debug)]
+pub struct Solver {
+    spec: ClothSpec,
+    params: Params,
+    topology: Topology,
+    state: ClothState,
+    last_good: ClothState,
+    mass: Vec<f32>,
+    inv_mass: Vec<f32>,
+    inv_inertia: Vec<f32>,
+    attachments: Vec<Attachment>,
+    colliders: Vec<Collider>,
+    bodies: Vec<Pose>,
+    tethers: Vec<stretch::Tether>,
+    rest_position: Vec<Vec3>,
+    // Scratch, kept to avoid allocating per step.
+    sub_from: Vec<Pose>,
+    sub_to: Vec<Pose>,
+    collider_from: Vec<Pose>,
+    collider_to: Vec<Pose>,
+    contacts: Vec<Contact>,
+    time: f64,
+    steps: u64,
+    diagnostics: Option<Box<Diagnostics>>,
+}
+
+impl Solver {
+    /// A cloth at rest in the layout of `spec`, with bodies at `bodies`.
+    pub fn new(spec: ClothSpec, params: Params, bodies: &[Pose]) -> Result<Self, SetupError> {
+        spec.validate()?;
+        params.validate()?;
+        let n = spec.len();
+        let state = ClothState::at_rest(&spec);
+        let m = spec.particle_mass();
+        Ok(Self {
+            topology: Topology::grid(&spec),
+            mass: vec![m; n],
+            inv_mass: vec![1.0 / m; n],
+            inv_inertia: vec![1.0 / spec.particle_inertia(); n],
+            attachments: Vec::new(),
+            colliders: Vec::new(),
+            bodies: bodies.to_vec(),
+            tethers: Vec::new(),
+            rest_position: state.position.clone(),
+            last_good: state.clone(),
+            sub_from: Vec::with_capacity(bodies.len()),
+            sub_to: Vec::with_capacity(bodies.len()),
+            collider_from: Vec::new(),
+            collider_to: Vec::new(),
+            contacts: vec![Contact::default(); n],
+            state,
+            time: 0.0,
+            steps: 0,
+            diagnostics: None,
+            spec,
+            params,
+        })
+    }
+
+    /// Drives `particle` by `body` from now on, keeping its current offset.
+    ///
+    /// # Panics
+    /// If the particle or body does not exist; use [`Solver::try_attach`] for input.
+    pub fn attach(&mut self, particle: usize, body: usize) {
+        self.try_attach(particle, body).expect("valid attachment");
+    }
+
+    /// Drives `particle` by `body` from now on, keeping its current offset.
+    pub fn try_attach(&mut self, particle: usize, body: usize) -> Result<(), SetupError> {
+        if particle >= self.state.len() {
+            return Err(SetupError::NoSuchParticle {
+                particle,
+                particles: self.state.len(),
+            });
+        }
+        let pose = *self
+            .bodies
+            .get(body)
+            .ok_or_else(|| SetupError::NoSuchBody {
+                what: format!("attachment of particle {particle}"),
+                body,
+                bodies: self.bodies.len(),
+            })?;
+        let world = Pose::new(
+            self.state.position[particle],
+            self.state.orientation[particle],
+        );
+        let local = Pose::new(
+            pose.inverse_transform_point(world.translation),
+            (pose.rotation.conjugate() * world.rotation).normalize(),
+        );
+        self.attachments.retain(|a| a.particle != particle);
+        self.attachments.push(Attachment {
+            particle,
+            body,
+            local,
+        });
+        self.mass[particle] = 0.0;
+        self.inv_mass[particle] = 0.0;
+        self.inv_inertia[particle] = 0.0;
+        let driven: Vec<usize> = self.attachments.iter().map(|a| a.particle).collect();
+        self.tethers = stretch::tethers(&self.rest_position, &driven);
+        Ok(())
+    }
+
+    /// Adds a collider.
+    pub fn add_collider(&mut self, collider: Collider) -> Result<(), SetupError> {
+        if let Some(b) = collider.body
+            && b >= self.bodies.len()
+        {
+            return Err(SetupError::NoSuchBody {
+                what: format!("collider {}", self.colliders.len()),
+                body: b,
+                bodies: self.bodies.len(),
+            });
+        }
+        crate::solver::params::check_range(
+            "collider.friction",
+            collider.friction,
+            0.0,
+            10.0,
+            false,
+            "0 ≤ μ ≤ 10",
+        )?;
+        self.colliders.push(collider);
+        Ok(())
+    }
+
+    /// Turns diagnostics on or off. Off, the solver computes none of them.
+    pub fn set_diagnostics(&mut self, on: bool) {
+        match (on, self.diagnostics.is_some()) {
+            (true, false) => self.diagnostics = Some(Box::new(Diagnostics::new(self.state.len()))),
+            (false, true) => self.diagnostics = None,
+            _ => {}
+        }
+    }
+
+    /// The last step's diagnostics, when on.
+    pub fn diagnostics(&self) -> Option<&Diagnostics> {
+        self.diagnostics.as_deref()
+    }
+
+    /// Replaces the parameters, after validating them; they apply from the next step.
+    pub fn set_params(&mut self, params: Params) -> Result<(), ParamError> {
+        params.validate()?;
+        self.params = params;
+        Ok(())
+    }
+
+    /// The parameters in force.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The cloth's layout and material.
+    pub fn spec(&self) -> &ClothSpec {
+        &self.spec
+    }
+
+    /// The constraint topology.
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &ClothState {
+        &self.state
+    }
+
+    /// Mutable state, to set up experiments (perturbations, initial velocity).
+    pub fn state_mut(&mut self) -> &mut ClothState {
+        &mut self.state
+    }
+
+    /// Mass of each particle (0 for driven particles).
+    pub fn masses(&self) -> &[f32] {
+        &self.mass
+    }
+
+    /// The attachments.
+    pub fn attachments(&self) -> &[Attachment] {
+        &self.attachments
+    }
+
+    /// The colliders.
+    pub fn colliders(&self) -> &[Collider] {
+        &self.colliders
+    }
+
+    /// The body poses at the current time.
+    pub fn bodies(&self) -> &[Pose] {
+        &self.bodies
+    }
+
+    /// Simulated time, in seconds.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// The forced-rotation function in force for substep length `dt`.
+    pub fn forced_rotation(&self) -> ForcedRotation {
+        let h = match self.params.h {
+            Width::Fixed(h) => h,
+            Width::Auto => {
+                let (dx, dy) = self.spec.spacing();
+                ForcedRotation::auto_width(
+                    self.spec.particle_mass(),
+                    self.spec.particle_inertia(),
+                    self.params.substep_dt(),
+                    0.5 * (dx + dy),
+                )
+            }
+        };
+        ForcedRotation {
+            phi: self.params.phi,
+            h,
+        }
+    }
+
+    /// The current violation of one family.
+    pub fn violation(&self, family: Family) -> Violation {
+        diagnostics::violation(family, &self.state, &self.topology)
+    }
+
+    /// The largest strain of a weft or warp edge.
+    pub fn max_strain(&self) -> f32 {
+        diagnostics::max_strain(&self.state, &self.topology)
+    }
+
+    /// The kinetic energy of the free particles, in joules.
+    pub fn kinetic_energy(&self) -> f32 {
+        diagnostics::kinetic_energy(&self.state, &self.mass, self.params.substep_dt())
+    }
+
+    /// Advances by `Δt`: the bodies move from their current poses to `bodies`.
+    ///
+    /// On error the state is left as it was before the step.
+    pub fn step(&mut self, env: &Environment, bodies: &[Pose]) -> Result<(), StepError> {
+        let step = self.steps + 1;
+        if bodies.len() != self.bodies.len() {
+            return Err(StepError::Bodies {
+                step,
+                given: bodies.len(),
+                expected: self.bodies.len(),
+            });
+        }
+        let start = self.diagnostics.is_some().then(Instant::now);
+        if let Some(d) = self.diagnostics.as_deref_mut() {
+            d.clear_step();
+        }
+        self.last_good.copy_from(&self.state);
+        let substeps = self.params.substeps;
+        let dt = self.params.substep_dt();
+        let rot = self.forced_rotation();
+        for sub in 0..substeps {
+            let (f0, f1) = (
+                sub as f32 / substeps as f32,
+                (sub + 1) as f32 / substeps as f32,
+            );
+            self.sub_from.clear();
+            self.sub_to.clear();
+            for (from, to) in self.bodies.iter().zip(bodies) {
+                self.sub_from.push(from.lerp(to, f0));
+                self.sub_to.push(from.lerp(to, f1));
+            }
+            self.substep(env, dt, &rot);
+            if let Err((particle, quantity, value)) = self.check_finite() {
+                self.state.copy_from(&self.last_good);
+                return Err(StepError::NonFinite {
+                    step,
+                    particle,
+                    quantity,
+                    value,
+                });
+            }
+        }
+        self.bodies.copy_from_slice(bodies);
+        self.time += self.params.dt as f64;
+        self.steps = step;
+        if let Some(d) = self.diagnostics.as_deref_mut() {
+            for f in Family::ALL {
+                d.families[f.index()].violation =
+                    diagnostics::violation(f, &self.state, &self.topology);
+            }
+            d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
+            d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);
+            d.timings.total = start.map(|s| s.elapsed()).unwrap_or_default();
+        }
+        Ok(())
+    }
+
+    fn substep(&mut self, env: &Environment, dt: f32, rot: &ForcedRotation) {
+        let t = self.diagnostics.is_some().then(Instant::now);
+        update::integrate(
+            &mut self.state,
+            &self.inv_mass,
+            env,
+            self.spec.density,
+            self.params.damping,
+            dt,
+        );
+        self.drive_attachments();
+        if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
+            d.timings.update += t.elapsed();
+            d.clear_corrections();
+        }
+
+        self.collider_from.clear();
+        self.collider_to.clear();
+        for c in &self.colliders {
+            self.collider_from.push(c.world_pose(&self.sub_from));
+            self.collider_to.push(c.world_pose(&self.sub_to));
+        }
+        self.contacts.fill(Contact::default());
+        let margin = 0.5 * self.spec.thickness;
+
+        for _ in 0..self.params.iterations {
+            for family in Family::ALL {
+                let weight = self.params.weights.get(family);
+                if weight == 0.0 {
+                    continue;
+                }
+                let mut p = Particles {
+                    x: &mut self.state.position,
+                    q: &mut self.state.orientation,
+                    inv_mass: &self.inv_mass,
+                    inv_inertia: &self.inv_inertia,
+                };
+                match self.diagnostics.as_deref_mut() {
+                    None => project_family(
+                        family,
+                        &self.topology,
+                        &self.tethers,
+                        &mut p,
+                        weight,
+                        rot,
+                        &mut NoRecord,
+                    ),
+                    Some(d) => {
+                        let t = Instant::now();
+                        let fd = &mut d.families[family.index()];
+                        project_family(
+                            family,
+                            &self.topology,
+                            &self.tethers,
+                            &mut p,
+                            weight,
+                            rot,
+                            &mut FamilyRecorder(fd),
+                        );
+                        fd.time += t.elapsed();
+                    }
+                }
+            }
+            if !self.colliders.is_empty() {
+                let t = self.diagnostics.is_some().then(Instant::now);
+                collision::project(
+                    &mut self.state.position,
+                    &self.inv_mass,
+                    &self.colliders,
+                    &self.collider_to,
+                    margin,
+                    &mut self.contacts,
+                );
+                if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
+                    d.timings.collisions += t.elapsed();
+                }
+            }
+        }
+        if !self.colliders.is_empty() {
+            collision::apply_friction(
+                &mut self.state.position,
+                &self.state.prev_position,
+                &self.colliders,
+                &self.collider_from,
+                &self.collider_to,
+                &self.contacts,
+            );
+        }
+    }
+
+    /// Puts every driven particle where its body holds it at the substep's end.
+    fn drive_attachments(&mut self) {
+        for a in &self.attachments {
+            let target = self.sub_to[a.body].compose(&a.local);
+            let i = a.particle;
+            self.state.prev_position[i] = self.state.position[i];
+            self.state.prev_orientation[i] = self.state.orientation[i];
+            self.state.position[i] = target.translation;
+            self.state.orientation[i] = target.rotation;
+        }
+    }
+
+    fn check_finite(&self) -> Result<(), (usize, &'static str, String)> {
+        let s = &self.state;
+        for i in 0..s.len() {
+            if !s.position[i].is_finite() {
+                return Err((i, "position", format!("{}", s.position[i])));
+            }
+            if !s.orientation[i].is_finite() {
+                return Err((i, "orientation", format!("{}", s.orientation[i])));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Projects every pair of one family once, colour batch by colour batch.
+fn project_family<R: Recorder>(
+    family: Family,
+    topology: &Topology,
+    tethers: &[stretch::Tether],
+    p: &mut Particles,
+    weight: f32,
+    rot: &ForcedRotation,
+    rec: &mut R,
+) {
+    use constraints::{curvature, normality, planarity};
+    match family {
+        Family::Stretch => {
+            for set in [&topology.structural, &topology.shear] {
+                for &pair in &set.items {
+                    stretch::project(p, pair, weight, rec);
+                }
+            }
+            for &t in tethers {
+                stretch::project_tether(p, t, weight, rec);
+            }
+        }
+        Family::Planarity => {
+            for &pair in &topology.structural.items {
+                planarity::project(p, pair, weight, rot, rec);
+            }
+        }
+        Family::Normality => {
+            for set in [&topology.structural, &topology.shear] {
+                for &pair in &set.items {
+                    normality::project(p, pair, weight, rot, rec);
+                }
+            }
+        }
+        Family::Curvature => {
+            for &pair in &topology.bend.items {
+                curvature::project(p, pair, weight, rot, rec);
+            }
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! Which particles each constraint family connects, in colour batches.
+//!
+//! The grid has three kinds of pair:
+//! - **structural** edges between direct neighbours along the weft and the warp;
+//! - **shear** diagonals across every grid cell (both diagonals);
+//! - **bend** triples: pairs two apart along the weft and the warp, with the
+//!   particle between them.
+//!
+//! Each set is graph-coloured: no two constraints in one colour share a
+//! particle, so the constraints of a colour can be projected in any order, or
+//! in parallel, with the same result. They are stored sorted by colour;
+//! `batches` holds the range of each colour. Colouring is greedy in a fixed
+//! order, so it is deterministic.
+
+use std::ops::Range;
+
+use super::cloth::ClothSpec;
+
+/// Two particles joined by a constraint, with their rest distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pair {
+    /// First particle.
+    pub a: u32,
+    /// Second particle.
+    pub b: u32,
+    /// Distance between them at rest, in metres.
+    pub rest: f32,
+}
+
+/// Three particles in a row, two edges long: the ends and the middle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triple {
+    /// One end.
+    pub a: u32,
+    /// The particle between the ends.
+    pub mid: u32,
+    /// The other end.
+    pub b: u32,
+    /// Distance between the ends at rest, in metres.
+    pub rest: f32,
+}
+
+/// A constraint's particles, for colouring.
+pub trait Touches {
+    /// The particles the constraint reads and writes.
+    fn particles(&self) -> impl Iterator<Item = u32>;
+}
+
+impl Touches for Pair {
+    fn particles(&self) -> impl Iterator<Item = u32> {
+        [self.a, self.b].into_iter()
+    }
+}
+
+impl Touches for Triple {
+    fn particles(&self) -> impl Iterator<Item = u32> {
+        [self.a, self.mid, self.b].into_iter()
+    }
+}
+
+/// A colour-sorted set of constraints.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Batched<T> {
+    /// The constraints, colour by colour.
+    pub items: Vec<T>,
+    /// The range of `items` that holds each colour.
+    pub batches: Vec<Range<usize>>,
+}
+
+impl<T> Default for Batched<T> {
+    fn default() -> Self {
+        Self {
+            items: Vec::new(),
+            batches: Vec::new(),
+        }
+    }
+}
+
+/// Weft, warp and shear edges.
+pub type PairSet = Batched<Pair>;
+/// Bend triples.
+pub type TripleSet = Batched<Triple>;
+
+impl<T: Touches + Copy> Batched<T> {
+    /// Colours `items` greedily (first colour used by none of its particles)
+    /// and sorts them by colour, keeping the original order within a colour.
+    pub fn coloured(items: Vec<T>, particles: usize) -> Self {
+        // A bit mask of colours already used at each particle. Grids need at
+        // most 6 colours per set; 64 is far more than any set here can need.
+        let mut used = vec![0u64; particles];
+        let mut colour_of = Vec::with_capacity(items.len());
+        for item in &items {
+            let taken = item.particles().fold(0, |m, i| m | used[i as usize]);
+            let c = (!taken).trailing_zeros();
+            assert!(c < 64, "constraint graph needs more than 64 colours");
+            for i in item.particles() {
+                used[i as usize] |= 1 << c;
+            }
+            colour_of.push(c as usize);
+        }
+        let colours = colour_of.iter().max().map_or(0, |c| c + 1);
+        let mut sorted = Vec::with_capacity(items.len());
+        let mut batches = Vec::with_capacity(colours);
+        for c in 0..colours {
+            let start = sorted.len();
+            sorted.extend(
+                items
+                    .iter()
+                    .zip(&colour_of)
+                    .filter(|(_, k)| **k == c)
+                    .map(|(p, _)| *p),
+            );
+            batches.push(start..sorted.len());
+        }
+        Self {
+            items: sorted,
+            batches,
+        }
+    }
+
+    /// Number of constraints.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether the set is empty.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+/// All pair sets of a grid cloth.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Topology {
+    /// Weft and warp neighbours.
+    pub structural: PairSet,
+    /// Both diagonals of every cell.
+    pub shear: PairSet,
+    /// Pairs two apart along the weft and the warp, with their middles.
+    pub bend: TripleSet,
+    /// Triangles of the cloth surface (two per cell), for meshes.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Topology {
+    /// The topology of a `weft × warp` grid with rest lengths from `spec`'s layout.
+    pub fn grid(spec: &ClothSpec) -> Self {
+        let (nx, ny) = (spec.weft, spec.warp);
+        let n = spec.len();
+        let idx = |i: u32, j: u32| spec.index(i, j) as u32;
+        let pair = |a: (u32, u32), b: (u32, u32)| Pair {
+            a: idx(a.0, a.1),
+            b: idx(b.0, b.1),
+            rest: spec
+                .rest_position(a.0, a.1)
+                .distance(spec.rest_position(b.0, b.1)),
+        };
+        let mut structural = Vec::new();
+        let mut shear = Vec::new();
+        let mut bend = Vec::new();
+        let mut triangles = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                if i + 1 < nx {
+                    structural.push(pair((i, j), (i + 1, j)));
+                }
+                if j + 1 < ny {
+                    structural.push(pair((i, j), (i, j + 1)));
+                }
+                if i + 1 < nx && j + 1 < ny {
+                    shear.push(pair((i, j), (i + 1, j + 1)));
+                    shear.push(pair((i + 1, j), (i, j + 1)));
+                    triangles.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+                    triangles.push([idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+                }
+                if i + 2 < nx {
+                    let p = pair((i, j), (i + 2, j));
+                    bend.push(Triple {
+                        a: p.a,
+                        mid: idx(i + 1, j),
+                        b: p.b,
+                        rest: p.rest,
+                    });
+                }
+                if j + 2 < ny {
+                    let p = pair((i, j), (i, j + 2));
+                    bend.push(Triple {
+                        a: p.a,
+                        mid: idx(i, j + 1),
+                        b: p.b,
+                        rest: p.rest,
+                    });
+                }
+            }
+        }
+        Self {
+            structural: PairSet::coloured(structural, n),
+            shear: PairSet::coloured(shear, n),
+            bend: TripleSet::coloured(bend, n),
+            triangles,
+        }
+    }
+}

@@ -1,0 +1,536 @@
+//! Property tests of the solver: invariants, monotone violation decrease,
+//! damping, Eq. 3, stability under abrupt motion, settling, determinism and
+//! validation.
+
+use glam::{Quat, Vec3};
+use proptest::prelude::*;
+use weft::solver::{
+    ClothSpec, Environment, Family, ForcedRotation, Params, Pose, Solver, StepError, Weights, Width,
+};
+
+/// No gravity, no air: nothing acts from outside.
+fn calm() -> Environment {
+    Environment {
+        gravity: Vec3::ZERO,
+        air_density: 0.0,
+        ..Environment::default()
+    }
+}
+
+fn spec(n: u32) -> ClothSpec {
+    ClothSpec {
+        weft: n,
+        warp: n,
+        ..ClothSpec::default()
+    }
+}
+
+/// A small deterministic generator (xorshift), so tests need no seed plumbing.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+    fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+/// Moves every particle by up to `dx` and tilts it by up to `dtheta`, at rest.
+fn perturb(solver: &mut Solver, seed: u64, dx: f32, dtheta: f32) {
+    let mut rng = Rng(seed.max(1));
+    let s = solver.state_mut();
+    for i in 0..s.len() {
+        s.position[i] += rng.vec3() * dx;
+        s.orientation[i] =
+            (Quat::from_scaled_axis(rng.vec3() * dtheta) * s.orientation[i]).normalize();
+    }
+    s.prev_position.clone_from(&s.position);
+    s.prev_orientation.clone_from(&s.orientation);
+}
+
+fn only(family: Family) -> Params {
+    let mut weights = Weights {
+        stretch: 0.0,
+        planarity: 0.0,
+        normality: 0.0,
+        curvature: 0.0,
+    };
+    *weights.get_mut(family) = 1.0;
+    Params {
+        weights,
+        damping: 0.0,
+        iterations: 1,
+        substeps: 1,
+        h: Width::Fixed(0.0),
+        phi: std::f32::consts::PI,
+        ..Params::default()
+    }
+}
+
+fn state_bits(s: &Solver) -> Vec<u32> {
+    let st = s.state();
+    st.position
+        .iter()
+        .chain(&st.prev_position)
+        .flat_map(|v| v.to_array())
+        .chain(
+            st.orientation
+                .iter()
+                .chain(&st.prev_orientation)
+                .flat_map(|q| q.to_array()),
+        )
+        .map(f32::to_bits)
+        .collect()
+}
+
+#[test]
+fn flat_rest_cloth_stays_put() {
+    let mut s = Solver::new(spec(12), Params::default(), &[]).unwrap();
+    s.set_diagnostics(true);
+    let before = s.state().clone();
+    for _ in 0..200 {
+        s.step(&calm(), &[]).unwrap();
+        let d = s.diagnostics().unwrap();
+        for f in Family::ALL {
+            let fd = d.family(f);
+            assert_eq!(fd.violation.max, 0.0, "{f:?} violated at rest");
+            assert!(
+                fd.dx.iter().all(|v| *v == Vec3::ZERO),
+                "{f:?} moved a particle"
+            );
+            assert!(
+                fd.dtheta.iter().all(|v| *v == Vec3::ZERO),
+                "{f:?} turned a particle"
+            );
+        }
+    }
+    assert_eq!(s.state(), &before);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn rigid_motion_violates_nothing(
+        t in prop::array::uniform3(-5.0f32..5.0),
+        axis in prop::array::uniform3(-1.0f32..1.0),
+        angle in -3.1f32..3.1,
+    ) {
+        let axis = Vec3::from(axis);
+        prop_assume!(axis.length() > 0.1);
+        let motion = Pose::new(Vec3::from(t), Quat::from_axis_angle(axis.normalize(), angle));
+        let mut s = Solver::new(spec(9), Params::default(), &[]).unwrap();
+        let st = s.state_mut();
+        for i in 0..st.len() {
+            st.position[i] = motion.transform_point(st.position[i]);
+            st.orientation[i] = (motion.rotation * st.orientation[i]).normalize();
+        }
+        for f in Family::ALL {
+            let v = s.violation(f);
+            prop_assert!(v.max < 2e-5, "{:?}: {}", f, v.max);
+        }
+    }
+
+    #[test]
+    fn each_family_alone_reduces_its_violation(seed in 1u64..u64::MAX, amp in 0.002f32..0.01) {
+        for family in Family::ALL {
+            let mut s = Solver::new(spec(10), only(family), &[]).unwrap();
+            perturb(&mut s, seed, amp, amp * 8.0);
+            let mut last = s.violation(family).rms;
+            let first = last;
+            for iteration in 0..20 {
+                s.step(&calm(), &[]).unwrap();
+                let now = s.violation(family).rms;
+                prop_assert!(now <= last * (1.0 + 1e-4), "{:?} rose at iteration {}: {} -> {}", family, iteration, last, now);
+                last = now;
+            }
+            prop_assert!(last < 0.5 * first, "{:?} barely decreased: {} -> {}", family, first, last);
+        }
+    }
+
+    #[test]
+    fn adjust_keeps_centre_of_mass_and_momentum(seed in 1u64..u64::MAX, v in prop::array::uniform3(-1.0f32..1.0)) {
+        let params = Params { damping: 1.0, ..Params::default() };
+        let mut s = Solver::new(spec(8), params, &[]).unwrap();
+        perturb(&mut s, seed, 0.01, 0.1);
+        let dt = params.substep_dt();
+        let v = Vec3::from(v);
+        let st = s.state_mut();
+        for i in 0..st.len() {
+            st.prev_position[i] = st.position[i] - v * dt;
+        }
+        let com = |s: &Solver| s.state().position.iter().copied().sum::<Vec3>() / s.state().len() as f32;
+        let momentum = |s: &Solver| {
+            let st = s.state();
+            st.position.iter().zip(&st.prev_position).map(|(x, p)| *x - *p).sum::<Vec3>() / dt
+        };
+        let (c0, p0) = (com(&s), momentum(&s));
+        s.step(&calm(), &[]).unwrap();
+        // With k = 1 and no forces the update alone moves the centre by v Δt per substep.
+        let expected = c0 + v * params.dt;
+        prop_assert!(com(&s).distance(expected) < 1e-4, "centre of mass moved: {} vs {}", com(&s), expected);
+        prop_assert!(momentum(&s).distance(p0) < 1e-2 * (1.0 + p0.length()), "momentum changed: {} vs {}", momentum(&s), p0);
+    }
+
+    #[test]
+    fn forced_rotation_obeys_eq3(full in 0.0f32..4.0, phi in 0.0f32..std::f32::consts::PI, h in 0.0f32..2.0) {
+        let angle = ForcedRotation { phi, h }.angle(full);
+        prop_assert!(angle <= phi + 1e-6, "exceeds Φ");
+        prop_assert!(angle <= full + 1e-6, "exceeds the full correction");
+        prop_assert!(angle >= 0.0);
+        // h → 0 gives the Φ-capped full correction.
+        let zero = ForcedRotation { phi, h: 0.0 }.angle(full);
+        prop_assert_eq!(zero, full.min(phi));
+        // A larger h never turns more.
+        let wider = ForcedRotation { phi, h: h + 0.5 }.angle(full);
+        prop_assert!(wider <= angle);
+    }
+}
+
+#[test]
+fn larger_h_suppresses_small_corrections() {
+    let phi = 1.0;
+    let small = 0.01;
+    let narrow = ForcedRotation { phi, h: 1e-4 }.angle(small);
+    let wide = ForcedRotation { phi, h: 0.1 }.angle(small);
+    assert!(
+        (narrow - small).abs() < 1e-6,
+        "narrow envelope should pass it: {narrow}"
+    );
+    assert!(
+        wide < 0.01 * small,
+        "wide envelope should suppress it: {wide}"
+    );
+    // Large corrections still approach Φ.
+    let large = ForcedRotation { phi, h: 0.1 }.angle(50.0);
+    assert!(large > 0.99 * phi);
+}
+
+#[test]
+fn no_forced_rotation_exceeds_phi_in_the_solver() {
+    let phi = 0.002;
+    let params = Params {
+        phi,
+        h: Width::Fixed(0.0),
+        ..Params::default()
+    };
+    let mut s = Solver::new(spec(10), params, &[]).unwrap();
+    perturb(&mut s, 7, 0.02, 0.5);
+    s.set_diagnostics(true);
+    let mut seen = 0.0f32;
+    for _ in 0..10 {
+        s.step(&Environment::default(), &[]).unwrap();
+        for f in Family::ALL {
+            let r = s.diagnostics().unwrap().family(f).max_rotation;
+            assert!(r <= phi * (1.0 + 1e-5), "{f:?} turned {r} > Φ = {phi}");
+            seen = seen.max(r);
+        }
+    }
+    assert!(
+        seen > 0.5 * phi,
+        "the cap was never reached ({seen}); the test would prove nothing"
+    );
+}
+
+#[test]
+fn lower_damping_dissipates_faster() {
+    let energy_after = |k: f32| {
+        let params = Params {
+            damping: k,
+            ..Params::default()
+        };
+        let mut s = Solver::new(spec(10), params, &[]).unwrap();
+        let mut rng = Rng(99);
+        let dt = params.substep_dt();
+        let st = s.state_mut();
+        for i in 0..st.len() {
+            st.prev_position[i] = st.position[i] - rng.vec3() * (0.5 * dt);
+        }
+        let e0 = s.kinetic_energy();
+        let mut trace = Vec::new();
+        for _ in 0..30 {
+            s.step(&calm(), &[]).unwrap();
+            trace.push(s.kinetic_energy());
+        }
+        (e0, trace)
+    };
+    let (e0, stiff) = energy_after(0.99);
+    let (e1, loose) = energy_after(0.9);
+    assert_eq!(e0, e1);
+    for (step, (a, b)) in loose.iter().zip(&stiff).enumerate() {
+        assert!(
+            a < b,
+            "step {step}: k = 0.9 kept {a} J, k = 0.99 kept {b} J"
+        );
+    }
+    assert!(loose[29] < 0.1 * stiff[29]);
+}
+
+/// A horizontal sheet held along one edge (a cantilever), drooping under
+/// gravity: the mean turning angle between successive edges after 4 s.
+fn mean_bend_angle(curvature: f32) -> f32 {
+    let spec = spec(16);
+    let params = Params {
+        weights: Weights {
+            curvature,
+            ..Weights::default()
+        },
+        ..Params::default()
+    };
+    let mut s = Solver::new(spec, params, &[Pose::IDENTITY]).unwrap();
+    for j in 0..16 {
+        s.attach(spec.index(0, j), 0);
+    }
+    for _ in 0..240 {
+        s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap();
+    }
+    let x = &s.state().position;
+    let (mut sum, mut n) = (0.0, 0);
+    for t in &s.topology().bend.items {
+        let (a, m, b) = (t.a as usize, t.mid as usize, t.b as usize);
+        sum += (x[m] - x[a]).angle_between(x[b] - x[m]);
+        n += 1;
+    }
+    sum / n as f32
+}
+
+#[test]
+fn higher_curvature_weight_bends_less() {
+    let soft = mean_bend_angle(0.05);
+    let medium = mean_bend_angle(0.3);
+    let stiff = mean_bend_angle(1.0);
+    assert!(
+        medium < 0.8 * soft && stiff < 0.8 * medium,
+        "mean bend for λ_curvature 0.05, 0.3, 1.0: {soft}, {medium}, {stiff} rad"
+    );
+}
+
+/// The jerk of the stability test: 20 m/s to rest in one step (at 0.25 s),
+/// a 90° turn in 0.2 s, then a 0.1 m jump.
+fn jerk_pose(step: u32, dt: f32) -> Pose {
+    let t = step as f32 * dt;
+    let stop = 0.25;
+    let x = 20.0 * t.min(stop);
+    let turn = ((t - stop - 0.2) / 0.2).clamp(0.0, 1.0) * std::f32::consts::FRAC_PI_2;
+    let z = if t >= stop + 0.6 { 0.1 } else { 0.0 };
+    Pose::new(Vec3::new(x, 0.0, z), Quat::from_rotation_z(turn))
+}
+
+/// The paper's showcase under the harshest motion: a flag pinned along its
+/// pole edge, cruising at 20 m/s, stops dead, turns and jumps. Eight substeps
+/// keep the per-substep travel (4 cm) below the grid spacing (6.7 cm).
+#[test]
+fn survives_abrupt_motion_with_low_strain() {
+    let spec = ClothSpec {
+        weft: 16,
+        warp: 16,
+        rotation: Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+        origin: Vec3::new(-1.0, 0.0, 0.0),
+        ..ClothSpec::default()
+    };
+    let params = Params {
+        substeps: 8,
+        ..Params::default()
+    };
+    let mut s = Solver::new(spec, params, &[jerk_pose(0, params.dt)]).unwrap();
+    for j in 0..16 {
+        s.attach(spec.index(15, j), 0);
+    }
+    let cruise = Vec3::new(20.0, 0.0, 0.0) * params.substep_dt();
+    let st = s.state_mut();
+    for i in 0..st.len() {
+        st.prev_position[i] = st.position[i] - cruise;
+    }
+    let env = Environment::default();
+    let mut worst = 0.0f32;
+    for step in 1..=120 {
+        s.step(&env, &[jerk_pose(step, params.dt)]).unwrap();
+        let strain = s.max_strain();
+        assert!(strain.is_finite());
+        assert!(strain < 0.10, "step {step}: strain {strain}");
+        worst = worst.max(strain);
+    }
+    assert!(
+        worst > 0.005,
+        "the jerk should strain the cloth a little ({worst})"
+    );
+}
+
+#[test]
+fn sheet_pinned_at_two_corners_settles() {
+    let spec = ClothSpec {
+        weft: 32,
+        warp: 32,
+        rotation: Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+        ..ClothSpec::default()
+    };
+    let params = Params {
+        damping: 0.98,
+        ..Params::default()
+    };
+    let mut s = Solver::new(spec, params, &[Pose::IDENTITY]).unwrap();
+    s.attach(spec.index(0, 31), 0);
+    s.attach(spec.index(31, 31), 0);
+    let env = Environment::default();
+    let threshold = 1e-4; // J: the sheet has 0.2 kg, so this is ~3 cm/s RMS
+    let mut settled_at = None;
+    for step in 1..=600 {
+        s.step(&env, &[Pose::IDENTITY]).unwrap();
+        if settled_at.is_none() && s.kinetic_energy() < threshold {
+            settled_at = Some(step);
+        }
+    }
+    assert!(
+        settled_at.is_some(),
+        "kinetic energy still {} J after 10 s",
+        s.kinetic_energy()
+    );
+    assert!(s.kinetic_energy() < threshold);
+    assert!(s.max_strain() < 0.02, "strain {}", s.max_strain());
+}
+
+#[test]
+fn runs_are_bit_identical() {
+    let run = || {
+        let mut s = Solver::new(spec(16), Params::default(), &[Pose::IDENTITY]).unwrap();
+        s.attach(0, 0);
+        let env = Environment {
+            wind: Vec3::new(3.0, 1.0, 0.0),
+            ..Environment::default()
+        };
+        for step in 1..=60 {
+            s.step(&env, &[jerk_pose(step, 1.0 / 60.0)]).unwrap();
+        }
+        state_bits(&s)
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn diagnostics_do_not_change_the_result() {
+    let run = |diag: bool| {
+        let mut s = Solver::new(spec(10), Params::default(), &[Pose::IDENTITY]).unwrap();
+        s.attach(0, 0);
+        s.set_diagnostics(diag);
+        for step in 1..=30 {
+            s.step(&Environment::default(), &[jerk_pose(step, 1.0 / 60.0)])
+                .unwrap();
+        }
+        state_bits(&s)
+    };
+    assert_eq!(run(true), run(false));
+}
+
+#[test]
+fn non_finite_state_is_reported_and_rolled_back() {
+    let mut s = Solver::new(spec(6), Params::default(), &[Pose::IDENTITY]).unwrap();
+    s.attach(0, 0);
+    s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap();
+    let good = s.state().clone();
+    let bad = Environment {
+        gravity: Vec3::new(0.0, 0.0, f32::NAN),
+        ..Environment::default()
+    };
+    let err = s.step(&bad, &[Pose::IDENTITY]).unwrap_err();
+    match &err {
+        StepError::NonFinite { step, particle, .. } => {
+            assert_eq!(*step, 2);
+            assert_eq!(
+                *particle, 1,
+                "particle 0 is pinned; 1 is the first free one"
+            );
+        }
+        other => panic!("unexpected {other}"),
+    }
+    assert!(err.to_string().contains("particle 1"));
+    assert_eq!(s.state(), &good);
+    assert_eq!(s.steps(), 1);
+}
+
+#[test]
+fn driven_particles_follow_their_body_exactly() {
+    let mut s = Solver::new(spec(6), Params::default(), &[Pose::IDENTITY]).unwrap();
+    s.attach(5, 0);
+    let offset = s.state().position[5];
+    for step in 1..=40 {
+        let pose = jerk_pose(step, 1.0 / 60.0);
+        s.step(&Environment::default(), &[pose]).unwrap();
+        assert!(s.state().position[5].distance(pose.transform_point(offset)) < 1e-5);
+    }
+}
+
+#[test]
+fn wind_pushes_a_face_more_than_an_edge() {
+    let env = Environment {
+        gravity: Vec3::ZERO,
+        wind: Vec3::new(10.0, 0.0, 0.0),
+        ..Environment::default()
+    };
+    let push = |rotation: Quat| {
+        let spec = ClothSpec {
+            weft: 4,
+            warp: 4,
+            rotation,
+            ..ClothSpec::default()
+        };
+        let mut s = Solver::new(spec, Params::default(), &[]).unwrap();
+        let c0: Vec3 = s.state().position.iter().copied().sum();
+        s.step(&env, &[]).unwrap();
+        let c1: Vec3 = s.state().position.iter().copied().sum();
+        (c1 - c0).x
+    };
+    let face_on = push(Quat::from_rotation_y(std::f32::consts::FRAC_PI_2));
+    let edge_on = push(Quat::IDENTITY);
+    assert!(face_on > 0.0);
+    assert!(
+        edge_on < 0.05 * face_on,
+        "edge-on {edge_on} vs face-on {face_on}"
+    );
+}
+
+#[test]
+fn every_rejected_parameter_has_its_own_message() {
+    type Mutator = fn(&mut Params);
+    let cases: &[(&str, Mutator)] = &[
+        ("damping", |p| p.damping = 1.5),
+        ("damping", |p| p.damping = f32::NAN),
+        ("weights.stretch", |p| p.weights.stretch = -0.1),
+        ("weights.planarity", |p| p.weights.planarity = 2.0),
+        ("weights.normality", |p| p.weights.normality = f32::INFINITY),
+        ("weights.curvature", |p| p.weights.curvature = 1.01),
+        ("phi", |p| p.phi = 4.0),
+        ("h", |p| p.h = Width::Fixed(-1.0)),
+        ("h", |p| p.h = Width::Fixed(f32::NAN)),
+        ("iterations", |p| p.iterations = 0),
+        ("iterations", |p| p.iterations = 1000),
+        ("dt", |p| p.dt = 0.0),
+        ("dt", |p| p.dt = 0.5),
+        ("substeps", |p| p.substeps = 0),
+        ("substeps", |p| p.substeps = 100),
+    ];
+    let mut messages = std::collections::HashSet::new();
+    for (name, mutate) in cases {
+        let mut p = Params::default();
+        mutate(&mut p);
+        let err = p.validate().unwrap_err();
+        assert_eq!(err.name, *name);
+        let msg = err.to_string();
+        assert!(msg.contains(name) && msg.contains("allowed"), "{msg}");
+        assert!(messages.insert(msg.clone()), "duplicate message {msg}");
+    }
+    assert!(Params::default().validate().is_ok());
+    let bad_cloth = ClothSpec {
+        weft: 513,
+        ..ClothSpec::default()
+    };
+    assert!(
+        Solver::new(bad_cloth, Params::default(), &[])
+            .unwrap_err()
+            .to_string()
+            .contains("cloth.weft")
+    );
+}
