@@ -1,7 +1,18 @@
 //! weft: an oriented-particle cloth simulator and live-telemetry debugger.
 //!
 //! - [`solver`]: the paper's method; depends on neither Rerun nor egui.
+//! - [`scene`]: presets (TOML) and the scenes they describe: moving bodies,
+//!   wind, colliders, on top of the solver.
+//! - [`telemetry`]: streams a scene to Rerun; reads recordings back.
+//! - [`record`], [`replay`]: headless runs with CI verdicts, and their
+//!   bit-for-bit reproduction.
+//! - [`cli`]: the `weft` command line.
 //!
 //! See `ARCHITECTURE.md` for the map of the crate.
 
+pub mod cli;
+pub mod record;
+pub mod replay;
+pub mod scene;
 pub mod solver;
+pub mod telemetry;

@@ -13,7 +13,6 @@
 //! loop streams through memory and constraint batches touch plain slices.
 
 use glam::{Quat, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::params::{ParamError, check_range};
 
@@ -23,8 +22,7 @@ pub const MIN_RESOLUTION: u32 = 2;
 pub const MAX_RESOLUTION: u32 = 512;
 
 /// What a cloth is made of and how it is laid out at rest.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClothSpec {
     /// Size along the weft (local X), in metres.
     pub width: f32,
@@ -211,6 +209,25 @@ impl ClothState {
     #[inline]
     pub fn normal(&self, i: usize) -> Vec3 {
         normal_of(self.orientation[i])
+    }
+
+    /// A 64-bit FNV-1a digest of every bit of the state: equal digests mean
+    /// (barring collisions) bit-identical states.
+    pub fn digest(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |v: f32| {
+            for b in v.to_bits().to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for v in self.position.iter().chain(&self.prev_position) {
+            v.to_array().into_iter().for_each(&mut eat);
+        }
+        for q in self.orientation.iter().chain(&self.prev_orientation) {
+            q.to_array().into_iter().for_each(&mut eat);
+        }
+        h
     }
 
     /// Copies `other` into `self` without reallocating.

@@ -8,11 +8,9 @@
 //! (position-based Coulomb friction).
 
 use glam::{Quat, Vec3};
-use serde::{Deserialize, Serialize};
 
 /// A rigid transform.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
     /// Translation, in metres.
     pub translation: Vec3,
@@ -71,8 +69,7 @@ impl Pose {
 }
 
 /// A collider's geometry, in its own frame.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
     /// The half-space below the local XY plane; its normal is local +Z.
     Plane,
@@ -137,25 +134,16 @@ fn sphere(p: Vec3, radius: f32) -> (f32, Vec3) {
 }
 
 /// A shape attached to a body (or to the world) with friction.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Collider {
     /// The geometry.
-    #[serde(flatten)]
     pub shape: Shape,
     /// The body it moves with; `None` for the world.
-    #[serde(default)]
     pub body: Option<usize>,
     /// Its pose in the body's frame (or the world's).
-    #[serde(default)]
     pub pose: Pose,
     /// Coulomb friction coefficient `μ ≥ 0`.
-    #[serde(default = "default_friction")]
     pub friction: f32,
-}
-
-fn default_friction() -> f32 {
-    0.5
 }
 
 impl Collider {

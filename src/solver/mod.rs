@@ -107,6 +107,10 @@ pub struct Attachment {
     pub body: usize,
     /// Its pose in the body's frame.
     pub local: Pose,
+    /// Whether the body also drives its orientation (a clamp, as a sewn
+    /// seam); otherwise it turns freely about the point (a pin, as a flag's
+    /// grommets on a pole).
+    pub clamp: bool,
 }
 
 /// A step that could not be completed.
@@ -224,16 +228,24 @@ impl Solver {
         })
     }
 
-    /// Drives `particle` by `body` from now on, keeping its current offset.
+    /// Clamps `particle` to `body` from now on (position and orientation),
+    /// keeping its current offset.
     ///
     /// # Panics
     /// If the particle or body does not exist; use [`Solver::try_attach`] for input.
     pub fn attach(&mut self, particle: usize, body: usize) {
-        self.try_attach(particle, body).expect("valid attachment");
+        self.try_attach(particle, body, true)
+            .expect("valid attachment");
     }
 
-    /// Drives `particle` by `body` from now on, keeping its current offset.
-    pub fn try_attach(&mut self, particle: usize, body: usize) -> Result<(), SetupError> {
+    /// Drives `particle` by `body` from now on, keeping its current offset;
+    /// with `clamp`, its orientation too, else it turns freely (a pin).
+    pub fn try_attach(
+        &mut self,
+        particle: usize,
+        body: usize,
+        clamp: bool,
+    ) -> Result<(), SetupError> {
         if particle >= self.state.len() {
             return Err(SetupError::NoSuchParticle {
                 particle,
@@ -261,10 +273,15 @@ impl Solver {
             particle,
             body,
             local,
+            clamp,
         });
         self.mass[particle] = 0.0;
         self.inv_mass[particle] = 0.0;
-        self.inv_inertia[particle] = 0.0;
+        self.inv_inertia[particle] = if clamp {
+            0.0
+        } else {
+            1.0 / self.spec.particle_inertia()
+        };
         let driven: Vec<usize> = self.attachments.iter().map(|a| a.particle).collect();
         self.tethers = stretch::tethers(&self.rest_position, &driven);
         Ok(())
@@ -466,9 +483,10 @@ impl Solver {
         update::integrate(
             &mut self.state,
             &self.inv_mass,
+            &self.inv_inertia,
             env,
             self.spec.density,
-            self.params.damping,
+            self.params.substep_damping(),
             dt,
         );
         self.drive_attachments();
@@ -557,9 +575,11 @@ impl Solver {
             let target = self.sub_to[a.body].compose(&a.local);
             let i = a.particle;
             self.state.prev_position[i] = self.state.position[i];
-            self.state.prev_orientation[i] = self.state.orientation[i];
             self.state.position[i] = target.translation;
-            self.state.orientation[i] = target.rotation;
+            if a.clamp {
+                self.state.prev_orientation[i] = self.state.orientation[i];
+                self.state.orientation[i] = target.rotation;
+            }
         }
     }
 

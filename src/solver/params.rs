@@ -109,8 +109,9 @@ impl<'de> Deserialize<'de> for Width {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
-    /// Damping `k ∈ [0, 1]` of the Störmer update, for position and orientation
-    /// (1 keeps all of the last displacement, 0 keeps none).
+    /// Damping `k ∈ [0, 1]` of the Störmer update, for position and orientation:
+    /// the fraction of velocity kept over one `Δt` (1 keeps all, 0 none),
+    /// applied as `k^(1/substeps)` per substep.
     pub damping: f32,
     /// Constraint weights `λ` per family.
     pub weights: Weights,
@@ -248,6 +249,12 @@ impl Params {
         check_range("dt", self.dt, 0.0, 0.1, true, "0 < Δt ≤ 0.1 s")?;
         check_count("substeps", self.substeps, 1, 64, "1 ≤ substeps ≤ 64")?;
         Ok(())
+    }
+
+    /// The damping applied per substep, `k^(1 / substeps)`: `k` is what is
+    /// kept of the velocity over a whole `Δt`, whatever the substeps.
+    pub fn substep_damping(&self) -> f32 {
+        self.damping.powf(1.0 / self.substeps as f32)
     }
 
     /// The substep length `Δt / substeps`, in seconds.

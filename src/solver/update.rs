@@ -20,13 +20,11 @@
 //! carried along by the wind instead of overshooting it.
 
 use glam::{Quat, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::cloth::{ClothState, normal_of};
 
 /// What acts on the cloth from outside, constant over one step.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Environment {
     /// Gravity, in m/s².
     pub gravity: Vec3,
@@ -73,10 +71,12 @@ pub fn wind_acceleration(env: &Environment, areal_density: f32, n: Vec3, v: Vec3
     cap(normal, un.abs()) + cap(tangent, ut.length())
 }
 
-/// Advances every free particle by one substep of length `dt`.
+/// Advances every free particle by one substep of length `dt`; pinned
+/// particles (no mass, free orientation) only turn.
 pub(crate) fn integrate(
     state: &mut ClothState,
     inv_mass: &[f32],
+    inv_inertia: &[f32],
     env: &Environment,
     areal_density: f32,
     damping: f32,
@@ -85,25 +85,25 @@ pub(crate) fn integrate(
     let dt2 = dt * dt;
     let with_wind = env.air_density > 0.0 && (env.drag_normal > 0.0 || env.drag_tangent > 0.0);
     for i in 0..state.len() {
-        if inv_mass[i] == 0.0 {
-            continue;
-        }
-        let x = state.position[i];
-        let disp = x - state.prev_position[i];
         let q = state.orientation[i];
-        let mut acc = env.gravity;
-        if with_wind {
-            acc += wind_acceleration(env, areal_density, normal_of(q), disp / dt, dt);
+        if inv_mass[i] > 0.0 {
+            let x = state.position[i];
+            let disp = x - state.prev_position[i];
+            let mut acc = env.gravity;
+            if with_wind {
+                acc += wind_acceleration(env, areal_density, normal_of(q), disp / dt, dt);
+            }
+            state.prev_position[i] = x;
+            state.position[i] = x + disp * damping + acc * dt2;
         }
-        state.prev_position[i] = x;
-        state.position[i] = x + disp * damping + acc * dt2;
-
-        let mut turn = q * state.prev_orientation[i].conjugate();
-        if turn.w < 0.0 {
-            turn = -turn;
+        if inv_inertia[i] > 0.0 {
+            let mut turn = q * state.prev_orientation[i].conjugate();
+            if turn.w < 0.0 {
+                turn = -turn;
+            }
+            state.prev_orientation[i] = q;
+            state.orientation[i] =
+                (Quat::from_scaled_axis(turn.to_scaled_axis() * damping) * q).normalize();
         }
-        state.prev_orientation[i] = q;
-        state.orientation[i] =
-            (Quat::from_scaled_axis(turn.to_scaled_axis() * damping) * q).normalize();
     }
 }

@@ -1,0 +1,282 @@
+//! The `weft` command line: list, check, show, record and replay presets.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use anyhow::{Context, bail};
+use clap::{Args, Parser, Subcommand};
+
+use crate::record::{Run, table, verdict};
+use crate::scene::{Override, Scene, load, shipped};
+use crate::telemetry::{Telemetry, blueprint};
+
+/// weft: oriented-particle cloth simulator and live-telemetry debugger.
+#[derive(Debug, Parser)]
+#[command(name = "weft", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// List the shipped presets with a one-line description each.
+    Presets,
+    /// Validate preset files (or shipped names); exits non-zero if any is invalid.
+    Check {
+        /// Preset files or shipped preset names.
+        #[arg(required = true)]
+        presets: Vec<String>,
+        /// Override a preset field, e.g. `--set solver.weights.curvature=0.3`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<Override>,
+    },
+    /// Print a preset as TOML, with `extend` and `--set` resolved: a start for your own.
+    Show {
+        /// Preset file or shipped preset name.
+        preset: String,
+        /// Override a preset field.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<Override>,
+    },
+    /// Run a preset headless and record its telemetry (to a file, a viewer or stdout).
+    Record(RecordArgs),
+    /// Re-run a recording and check that it reproduces its final state bit for bit.
+    Replay {
+        /// The `.rrd` file written by `weft record`.
+        file: PathBuf,
+    },
+}
+
+/// Options of `weft record`.
+#[derive(Debug, Args)]
+pub struct RecordArgs {
+    /// Preset file or shipped preset name.
+    pub preset: String,
+    /// Number of frames to run (default: the preset's `duration`).
+    #[arg(long, conflicts_with = "seconds")]
+    pub frames: Option<u64>,
+    /// Simulated seconds to run (default: the preset's `duration`).
+    #[arg(long)]
+    pub seconds: Option<f32>,
+    /// Override a preset field, e.g. `--set solver.iterations=20`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<Override>,
+    /// Telemetry level: off, summary or full (same as `--set telemetry.level=…`).
+    #[arg(long)]
+    pub level: Option<String>,
+    /// Log every N-th frame (same as `--set telemetry.log_every=N`).
+    #[arg(long, value_name = "N")]
+    pub log_every: Option<u32>,
+    /// Smallest correction drawn as an arrow (same as `--set telemetry.arrow_threshold=X`).
+    #[arg(long, value_name = "X")]
+    pub arrow_threshold: Option<f32>,
+    /// Colour particles by strain, speed, correction or none.
+    #[arg(long, value_name = "QUANTITY")]
+    pub color_by: Option<String>,
+    /// Write the run's figures and verdicts as JSON to this file.
+    #[arg(long, value_name = "FILE.json")]
+    pub summary: Option<PathBuf>,
+    /// Save the recording to this `.rrd` file.
+    #[arg(long, value_name = "FILE.rrd", group = "sink")]
+    pub save: Option<PathBuf>,
+    /// Stream to a running Rerun viewer.
+    #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = DEFAULT_VIEWER, group = "sink")]
+    pub connect: Option<String>,
+    /// Write the recording to standard output (e.g. `| rerun -`).
+    #[arg(long, short = 'o', group = "sink")]
+    pub stdout: bool,
+}
+
+/// Where `--connect` goes without a URL: a viewer started with `rerun`.
+pub const DEFAULT_VIEWER: &str = "rerun+http://127.0.0.1:9876/proxy";
+
+impl RecordArgs {
+    /// The `--set` overrides, with the telemetry shortcuts appended.
+    fn overrides(&self) -> Vec<Override> {
+        let mut sets = self.set.clone();
+        let mut add = |key: &str, value: toml::Value| {
+            sets.push(Override {
+                key: key.into(),
+                value,
+            })
+        };
+        if let Some(l) = &self.level {
+            add("telemetry.level", toml::Value::String(l.clone()));
+        }
+        if let Some(n) = self.log_every {
+            add("telemetry.log_every", toml::Value::Integer(n as i64));
+        }
+        if let Some(x) = self.arrow_threshold {
+            add("telemetry.arrow_threshold", toml::Value::Float(x as f64));
+        }
+        if let Some(c) = &self.color_by {
+            add("telemetry.color_by", toml::Value::String(c.clone()));
+        }
+        sets
+    }
+}
+
+/// Runs a parsed command line; returns the process exit code.
+pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
+    match cli.command {
+        Command::Presets => {
+            let width = shipped::ALL.iter().map(|p| p.name.len()).max().unwrap_or(0);
+            for p in shipped::ALL {
+                println!("{:<width$}  {}", p.name, p.description());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Check { presets, set } => {
+            let mut failed = 0;
+            for p in &presets {
+                match load::load(p, &set) {
+                    Ok(l) => {
+                        let c = &l.preset.cloth;
+                        println!(
+                            "ok      {p}: {}×{} cloth, {} bodies, {} colliders",
+                            c.weft,
+                            c.warp,
+                            l.preset.bodies.len(),
+                            l.preset.colliders.len()
+                        );
+                    }
+                    Err(e) => {
+                        failed += 1;
+                        println!("error   {e}");
+                    }
+                }
+            }
+            Ok(if failed == 0 {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            })
+        }
+        Command::Show { preset, set } => {
+            let loaded = load::load(&preset, &set)?;
+            print!(
+                "{}",
+                toml::to_string(&loaded.preset).context("serializing the preset")?
+            );
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Record(args) => record(args),
+        Command::Replay { file } => {
+            let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
+            let stored = r
+                .recorded_digest
+                .as_deref()
+                .unwrap_or("none (the run did not finish)");
+            println!(
+                "replayed {} frames with {} parameter changes: final state {}, recorded {}",
+                r.frames, r.changes, r.digest, stored
+            );
+            if let Some(m) = r.positions_match {
+                println!(
+                    "particles at the last logged frame: {}",
+                    if m { "identical" } else { "DIFFERENT" }
+                );
+            }
+            if r.reproduced() {
+                println!("reproduced bit for bit");
+                Ok(ExitCode::SUCCESS)
+            } else {
+                println!("NOT reproduced");
+                Ok(ExitCode::FAILURE)
+            }
+        }
+    }
+}
+
+fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
+    let loaded = load::load(&args.preset, &args.overrides())?;
+    let preset = &loaded.preset;
+    let scene =
+        Scene::new(preset).with_context(|| format!("building the scene of {}", args.preset))?;
+    let frames = match (args.frames, args.seconds) {
+        (Some(n), _) => n,
+        (None, Some(s)) if s.is_finite() && s > 0.0 => scene.frames_in(s),
+        (None, Some(s)) => bail!("--seconds {s}: expected a positive number of seconds"),
+        (None, None) => scene.frames_in(preset.duration),
+    };
+
+    // The sink is opened before anything is simulated: an unwritable path or
+    // an unreachable viewer fails here.
+    let rec = open_sink(&args)?;
+    let telemetry = Telemetry::new(rec.clone(), preset.telemetry);
+    let mut run = Run::start(scene, telemetry, &args.preset, &loaded.resolved)?;
+    if let Some(url) = &args.connect {
+        rec.flush_with_timeout(std::time::Duration::from_secs(10)).map_err(|e| {
+            anyhow::anyhow!(
+                "could not reach a Rerun viewer at {url} ({e}); start one with `rerun` (pip install rerun-sdk==0.36.3), or record to a file with --save FILE.rrd"
+            )
+        })?;
+    }
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    // A second Ctrl-C while closing the file is left to the default handler.
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
+
+    let bar = indicatif::ProgressBar::new(frames).with_style(
+        indicatif::ProgressStyle::with_template(
+            "{msg} [{bar:40}] {pos}/{len} frames, {per_sec}, eta {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(args.preset.clone());
+    let outcome = run.run(frames, &stop, |_| bar.inc(1));
+    bar.finish_and_clear();
+
+    let failed = outcome.is_err();
+    if let Err(e) = &outcome {
+        eprintln!("error: {e}");
+    }
+    let figures = run.finish()?;
+    drop(rec);
+    let checks = preset
+        .expect
+        .map(|e| verdict(&e, &figures))
+        .unwrap_or_default();
+    eprint!("{}", table(&figures, &checks));
+    if let Some(path) = &args.summary {
+        let json = serde_json::json!({ "figures": figures, "checks": checks });
+        std::fs::write(path, serde_json::to_string_pretty(&json)?)
+            .with_context(|| format!("writing the summary to {}", path.display()))?;
+    }
+    if failed || checks.iter().any(|c| !c.ok) {
+        return Ok(ExitCode::FAILURE);
+    }
+    if figures.interrupted {
+        return Ok(ExitCode::from(130));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
+    let builder =
+        rerun::RecordingStreamBuilder::new("weft").with_default_blueprint(blueprint::default());
+    if let Some(path) = &args.save {
+        return builder
+            .save(path)
+            .map_err(|e| anyhow::anyhow!("cannot write the recording to {}: {e}", path.display()));
+    }
+    if let Some(url) = &args.connect {
+        return builder
+            .connect_grpc_opts(url.clone())
+            .map_err(|e| anyhow::anyhow!("cannot connect to a Rerun viewer at {url}: {e}"));
+    }
+    if args.stdout {
+        return builder
+            .stdout()
+            .context("streaming the recording to standard output");
+    }
+    eprintln!("note: no --save, --connect or --stdout: the telemetry is not kept");
+    Ok(rerun::RecordingStream::disabled())
+}

@@ -1,0 +1,298 @@
+//! Headless recording: run a scene, stream its telemetry, keep the figures a
+//! CI job needs, and judge them against the preset's `[expect]` table.
+//!
+//! [`Run`] drives one scene frame by frame. It is shared by `weft record`,
+//! `weft replay` and the desktop app, so a parameter change reaches the
+//! recording at the frame it takes effect, whoever made it.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::scene::{Scene, preset::Expect};
+use crate::solver::{Family, Params, StepError};
+use crate::telemetry::{Telemetry, paths};
+
+/// What a run measured.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Figures {
+    /// The preset's name or path.
+    pub preset: String,
+    /// Frames stepped.
+    pub frames: u64,
+    /// Simulated seconds.
+    pub sim_seconds: f64,
+    /// Wall-clock seconds spent stepping and logging.
+    pub wall_seconds: f64,
+    /// Frames per wall-clock second.
+    pub steps_per_second: f64,
+    /// Largest edge strain seen at any frame.
+    pub max_strain: f32,
+    /// Largest violation seen at any frame, per family.
+    pub max_violation: std::collections::BTreeMap<String, f32>,
+    /// Kinetic energy at the last frame, in joules.
+    pub final_kinetic_energy: f32,
+    /// Whether the state stayed finite.
+    pub finite: bool,
+    /// Whether the run was interrupted (Ctrl-C) before its last frame.
+    pub interrupted: bool,
+    /// The solver failure that ended the run, if any.
+    pub failure: Option<String>,
+    /// Digest of the final state (see `ClothState::digest`), in hex.
+    pub final_state: String,
+}
+
+/// One `[expect]` bound checked against the figures.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Check {
+    /// The bound, as written in the preset (`expect.max_strain`).
+    pub bound: String,
+    /// The limit.
+    pub limit: f64,
+    /// What the run measured.
+    pub value: f64,
+    /// Whether the run stayed within it.
+    pub ok: bool,
+}
+
+/// Checks `figures` against `expect`.
+pub fn verdict(expect: &Expect, figures: &Figures) -> Vec<Check> {
+    let mut checks = Vec::new();
+    let mut check = |bound: String, limit: f32, value: f32| {
+        checks.push(Check {
+            bound,
+            limit: limit as f64,
+            value: value as f64,
+            ok: value <= limit,
+        })
+    };
+    if let Some(limit) = expect.max_strain {
+        check("expect.max_strain".into(), limit, figures.max_strain);
+    }
+    for f in Family::ALL {
+        if let Some(limit) = expect.max_violation.get(f) {
+            let value = figures.max_violation.get(f.name()).copied().unwrap_or(0.0);
+            check(format!("expect.max_violation.{}", f.name()), limit, value);
+        }
+    }
+    if let Some(limit) = expect.settle_energy {
+        check(
+            "expect.settle_energy".into(),
+            limit,
+            figures.final_kinetic_energy,
+        );
+    }
+    if expect.finite {
+        checks.push(Check {
+            bound: "expect.finite".into(),
+            limit: 1.0,
+            value: if figures.finite { 1.0 } else { 0.0 },
+            ok: figures.finite,
+        });
+    }
+    checks
+}
+
+/// How a run ended early.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The solver failed; the failure was logged and the recording closed.
+    #[error("solver failure at frame {frame}: {error}")]
+    Solver {
+        /// The frame that failed.
+        frame: u64,
+        /// What failed.
+        error: StepError,
+    },
+    /// Writing telemetry failed.
+    #[error("telemetry: {0}")]
+    Telemetry(#[from] rerun::RecordingStreamError),
+}
+
+/// A scene being stepped and recorded.
+pub struct Run {
+    /// The scene.
+    pub scene: Scene,
+    /// Where its telemetry goes.
+    pub telemetry: Telemetry,
+    figures: Figures,
+    wall: std::time::Duration,
+}
+
+impl Run {
+    /// Starts a run: logs static data, the initial parameters and frame 0.
+    pub fn start(
+        mut scene: Scene,
+        telemetry: Telemetry,
+        name: &str,
+        resolved: &str,
+    ) -> Result<Self, RunError> {
+        scene
+            .solver_mut()
+            .set_diagnostics(telemetry.needs_diagnostics());
+        let mut run = Self {
+            figures: Figures {
+                preset: name.to_string(),
+                finite: true,
+                max_violation: Family::ALL
+                    .iter()
+                    .map(|f| (f.name().to_string(), 0.0))
+                    .collect(),
+                ..Figures::default()
+            },
+            scene,
+            telemetry,
+            wall: std::time::Duration::ZERO,
+        };
+        run.telemetry.log_static(&run.scene, resolved)?;
+        let params = *run.scene.solver().params();
+        run.telemetry.log_params(0, 0.0, &params)?;
+        run.telemetry.log_frame(&run.scene)?;
+        Ok(run)
+    }
+
+    /// Applies new parameters from the next step on; they are logged at the
+    /// frame that step produces.
+    pub fn set_params(&mut self, params: Params) -> Result<(), crate::solver::ParamError> {
+        self.scene.set_params(params)
+    }
+
+    /// Steps one frame and logs it.
+    pub fn step(&mut self) -> Result<(), RunError> {
+        let start = Instant::now();
+        let frame = self.scene.frame() + 1;
+        let time = self.scene.time() + self.scene.solver().params().dt as f64;
+        let params = *self.scene.solver().params();
+        self.telemetry.log_params(frame, time, &params)?;
+        if let Err(error) = self.scene.step() {
+            self.figures.finite = false;
+            self.figures.failure = Some(error.to_string());
+            self.telemetry.log_failure(frame, time, &error)?;
+            return Err(RunError::Solver { frame, error });
+        }
+        self.measure();
+        self.telemetry.log_frame(&self.scene)?;
+        self.wall += start.elapsed();
+        Ok(())
+    }
+
+    fn measure(&mut self) {
+        let solver = self.scene.solver();
+        let f = &mut self.figures;
+        let (strain, violations) = match solver.diagnostics() {
+            Some(d) => (
+                d.max_strain,
+                Family::ALL.map(|fam| d.family(fam).violation.max),
+            ),
+            None => (
+                solver.max_strain(),
+                Family::ALL.map(|fam| solver.violation(fam).max),
+            ),
+        };
+        f.max_strain = f.max_strain.max(strain);
+        for (fam, v) in Family::ALL.iter().zip(violations) {
+            let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
+            *slot = slot.max(v);
+        }
+    }
+
+    /// Steps `frames` frames, or until `stop` is set; `tick` is called after each.
+    pub fn run(
+        &mut self,
+        frames: u64,
+        stop: &AtomicBool,
+        mut tick: impl FnMut(u64),
+    ) -> Result<(), RunError> {
+        for _ in 0..frames {
+            if stop.load(Ordering::Relaxed) {
+                self.figures.interrupted = true;
+                break;
+            }
+            self.step()?;
+            tick(self.scene.frame());
+        }
+        Ok(())
+    }
+
+    /// The figures so far.
+    pub fn figures(&self) -> Figures {
+        let mut f = self.figures.clone();
+        let solver = self.scene.solver();
+        f.frames = self.scene.frame();
+        f.sim_seconds = self.scene.time();
+        f.wall_seconds = self.wall.as_secs_f64();
+        f.steps_per_second = if f.wall_seconds > 0.0 {
+            f.frames as f64 / f.wall_seconds
+        } else {
+            0.0
+        };
+        f.final_kinetic_energy = solver.kinetic_energy();
+        f.final_state = format!("{:016x}", solver.state().digest());
+        f
+    }
+
+    /// Logs the end-of-run summary, flushes, and returns the figures.
+    pub fn finish(self) -> Result<Figures, RunError> {
+        let figures = self.figures();
+        let text = toml::to_string(&figures).expect("figures serialize");
+        self.telemetry.stream().log_static(
+            paths::SUMMARY,
+            &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
+        )?;
+        self.telemetry.flush().ok();
+        Ok(figures)
+    }
+}
+
+/// A plain-text table of the figures and checks, for the terminal.
+pub fn table(figures: &Figures, checks: &[Check]) -> String {
+    let mut s = String::new();
+    let status = if figures.failure.is_some() {
+        "FAILED"
+    } else if figures.interrupted {
+        "interrupted"
+    } else {
+        "done"
+    };
+    s += &format!(
+        "{status}: {} frames ({:.2} s simulated) in {:.2} s, {:.1} steps/s\n",
+        figures.frames, figures.sim_seconds, figures.wall_seconds, figures.steps_per_second
+    );
+    s += &format!(
+        "  {:<28} {:>12}\n",
+        "max strain",
+        format!("{:.4}", figures.max_strain)
+    );
+    for (family, v) in &figures.max_violation {
+        s += &format!(
+            "  {:<28} {:>12}\n",
+            format!("max violation {family}"),
+            format!("{v:.4}")
+        );
+    }
+    s += &format!(
+        "  {:<28} {:>12}\n",
+        "final kinetic energy (J)",
+        format!("{:.3e}", figures.final_kinetic_energy)
+    );
+    if let Some(f) = &figures.failure {
+        s += &format!("  failure: {f}\n");
+    }
+    if !checks.is_empty() {
+        s += &format!(
+            "  {:<32} {:>12} {:>12}  verdict\n",
+            "expect", "limit", "measured"
+        );
+        for c in checks {
+            s += &format!(
+                "  {:<32} {:>12} {:>12}  {}\n",
+                c.bound,
+                format!("{:.4e}", c.limit),
+                format!("{:.4e}", c.value),
+                if c.ok { "ok" } else { "FAIL" }
+            );
+        }
+    }
+    s
+}

@@ -1,0 +1,99 @@
+//! Replaying a recording: re-run the preset and the parameter changes it
+//! stores, and check that the state comes out bit for bit the same.
+
+use std::path::Path;
+
+use crate::scene::{Scene, load};
+use crate::solver::Params;
+use crate::telemetry::read;
+
+/// What a replay found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Replayed {
+    /// Frames re-run.
+    pub frames: u64,
+    /// Digest of the replayed final state.
+    pub digest: String,
+    /// Digest the recording stored, if it finished.
+    pub recorded_digest: Option<String>,
+    /// Whether the particles matched bit for bit at the last logged frame
+    /// (`None` when the recording has no particles).
+    pub positions_match: Option<bool>,
+    /// Parameter changes applied.
+    pub changes: usize,
+}
+
+impl Replayed {
+    /// Whether everything that could be compared matched.
+    pub fn reproduced(&self) -> bool {
+        self.recorded_digest
+            .as_ref()
+            .is_none_or(|d| *d == self.digest)
+            && self.positions_match != Some(false)
+    }
+}
+
+/// Re-runs the recording at `path`.
+pub fn replay(path: &Path) -> Result<Replayed, String> {
+    let rec = read::read(path)?;
+    let text = rec.preset.ok_or_else(|| {
+        format!(
+            "{}: no preset stored (not a weft recording?)",
+            path.display()
+        )
+    })?;
+    let label = format!("preset stored in {}", path.display());
+    let preset = load::parse(&label, &text).map_err(|e| e.to_string())?;
+    let summary: Option<toml::Table> = rec.summary.as_deref().and_then(|s| s.parse().ok());
+    let recorded_frames = summary
+        .as_ref()
+        .and_then(|s| s.get("frames")?.as_integer())
+        .map(|f| f as u64);
+    let recorded_digest = summary
+        .as_ref()
+        .and_then(|s| Some(s.get("final_state")?.as_str()?.to_string()));
+    let last_logged = rec.last_positions.as_ref().map(|(f, _)| *f as u64);
+    let frames = recorded_frames.or(last_logged).unwrap_or(0);
+
+    let mut changes: Vec<(u64, Params)> = Vec::new();
+    for (frame, text) in &rec.params {
+        let params: Params =
+            toml::from_str(text).map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
+        changes.push((*frame as u64, params));
+    }
+    let mut scene = Scene::new(&preset).map_err(|e| e.to_string())?;
+    let apply = |scene: &mut Scene, frame: u64| -> Result<(), String> {
+        for (_, p) in changes.iter().filter(|(f, _)| *f == frame) {
+            scene
+                .set_params(*p)
+                .map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
+        }
+        Ok(())
+    };
+    apply(&mut scene, 0)?;
+    let mut positions_match = None;
+    for frame in 1..=frames {
+        apply(&mut scene, frame)?;
+        scene
+            .step()
+            .map_err(|e| format!("replay failed at frame {frame}: {e}"))?;
+        if let Some((f, recorded)) = &rec.last_positions
+            && *f as u64 == frame
+        {
+            let x = &scene.solver().state().position;
+            positions_match = Some(
+                x.len() == recorded.len()
+                    && x.iter()
+                        .zip(recorded)
+                        .all(|(a, b)| a.to_array().map(f32::to_bits) == b.map(f32::to_bits)),
+            );
+        }
+    }
+    Ok(Replayed {
+        frames,
+        digest: format!("{:016x}", scene.solver().state().digest()),
+        recorded_digest,
+        positions_match,
+        changes: changes.len().saturating_sub(1),
+    })
+}

@@ -1,0 +1,197 @@
+//! Scenes: a preset brought to life: cloth, moving bodies, wind, colliders.
+//!
+//! [`Scene`] owns a [`Solver`] and the motion of every body. Each
+//! [`Scene::step`] evaluates the bodies' poses and the wind at the end of the
+//! frame and advances the solver by one `Δt`. Everything is deterministic:
+//! the same preset gives the same frames.
+//!
+//! ```
+//! use weft::scene::{Scene, load};
+//!
+//! let loaded = load::load("hanging_sheet", &[]).unwrap();
+//! let mut scene = Scene::new(&loaded.preset).unwrap();
+//! for _ in 0..10 {
+//!     scene.step().unwrap();
+//! }
+//! assert!(scene.solver().max_strain() < 0.1);
+//! ```
+
+pub mod load;
+pub mod motion;
+pub mod preset;
+pub mod shipped;
+
+use glam::{Quat, Vec3};
+
+pub use load::{Loaded, Override, PresetError};
+pub use preset::Preset;
+
+use crate::solver::{
+    Collider, Environment, ParamError, Params, Pose, SetupError, Shape, Solver, StepError,
+};
+use motion::Motion;
+use preset::{ShapeKind, WindSection, euler};
+
+/// A running scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    preset: Preset,
+    solver: Solver,
+    motions: Vec<Motion>,
+    poses: Vec<Pose>,
+    frame: u64,
+}
+
+impl Scene {
+    /// Builds the scene a (validated) preset describes, at time 0.
+    pub fn new(preset: &Preset) -> Result<Self, SetupError> {
+        let mut motions: Vec<Motion> = preset.bodies.iter().map(Motion::new).collect();
+        let poses: Vec<Pose> = motions.iter_mut().map(|m| m.pose(0.0)).collect();
+        let spec = preset.cloth.spec();
+        let mut solver = Solver::new(spec, preset.solver, &poses)?;
+        let body = |name: &str| preset.bodies.iter().position(|b| b.name == name);
+        for (a, att) in preset.attachments.iter().enumerate() {
+            let b = body(&att.body).ok_or_else(|| SetupError::NoSuchBody {
+                what: format!("attachment {a} (`{}`)", att.body),
+                body: usize::MAX,
+                bodies: poses.len(),
+            })?;
+            let cells = att
+                .select
+                .iter()
+                .flat_map(|r| r.cells(spec.weft, spec.warp))
+                .chain(att.particles.iter().copied());
+            for [i, j] in cells {
+                if i >= spec.weft || j >= spec.warp {
+                    return Err(SetupError::NoSuchParticle {
+                        particle: spec.index(i.min(spec.weft), j.min(spec.warp)),
+                        particles: spec.len(),
+                    });
+                }
+                solver.try_attach(spec.index(i, j), b, att.clamp)?;
+            }
+        }
+        for c in &preset.colliders {
+            let shape = match c.shape {
+                ShapeKind::Plane => Shape::Plane,
+                ShapeKind::Sphere => Shape::Sphere {
+                    radius: c.radius.unwrap_or(0.5),
+                },
+                ShapeKind::Capsule => Shape::Capsule {
+                    radius: c.radius.unwrap_or(0.1),
+                    half_length: c.half_length.unwrap_or(0.5),
+                },
+                ShapeKind::Box => Shape::Box {
+                    half_extents: c.half_extents.unwrap_or(Vec3::splat(0.5)),
+                },
+            };
+            solver.add_collider(Collider {
+                shape,
+                body: match &c.body {
+                    Some(name) => Some(body(name).ok_or_else(|| SetupError::NoSuchBody {
+                        what: format!("collider on `{name}`"),
+                        body: usize::MAX,
+                        bodies: poses.len(),
+                    })?),
+                    None => None,
+                },
+                pose: Pose::new(c.position, euler(c.rotation)),
+                friction: c.friction,
+            })?;
+        }
+        Ok(Self {
+            preset: preset.clone(),
+            solver,
+            motions,
+            poses,
+            frame: 0,
+        })
+    }
+
+    /// Advances one frame (`Δt`).
+    pub fn step(&mut self) -> Result<(), StepError> {
+        let t0 = self.solver.time() as f32;
+        let t1 = t0 + self.solver.params().dt;
+        for (pose, m) in self.poses.iter_mut().zip(&mut self.motions) {
+            *pose = m.pose(t1);
+        }
+        let env = self.environment_at(t0);
+        self.solver.step(&env, &self.poses)?;
+        self.frame += 1;
+        Ok(())
+    }
+
+    /// Gravity, air and the gusting wind at time `t`.
+    pub fn environment_at(&self, t: f32) -> Environment {
+        let e = &self.preset.environment;
+        Environment {
+            gravity: e.gravity,
+            wind: wind_at(&e.wind, t),
+            air_density: e.air_density,
+            drag_normal: e.drag_normal,
+            drag_tangent: e.drag_tangent,
+        }
+    }
+
+    /// Replaces the solver parameters from the next step on.
+    pub fn set_params(&mut self, params: Params) -> Result<(), ParamError> {
+        self.solver.set_params(params)?;
+        self.preset.solver = params;
+        Ok(())
+    }
+
+    /// The preset, with any parameter changes applied.
+    pub fn preset(&self) -> &Preset {
+        &self.preset
+    }
+
+    /// The solver.
+    pub fn solver(&self) -> &Solver {
+        &self.solver
+    }
+
+    /// The solver, mutably (e.g. to turn diagnostics on).
+    pub fn solver_mut(&mut self) -> &mut Solver {
+        &mut self.solver
+    }
+
+    /// Frames stepped so far.
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// Simulated time, in seconds.
+    pub fn time(&self) -> f64 {
+        self.solver.time()
+    }
+
+    /// Body names, in body-index order.
+    pub fn body_names(&self) -> impl Iterator<Item = &str> {
+        self.preset.bodies.iter().map(|b| b.name.as_str())
+    }
+
+    /// Body poses at the current time.
+    pub fn body_poses(&self) -> &[Pose] {
+        self.solver.bodies()
+    }
+
+    /// Frames in `seconds` of simulated time (at least one).
+    pub fn frames_in(&self, seconds: f32) -> u64 {
+        ((seconds / self.solver.params().dt).round() as u64).max(1)
+    }
+}
+
+/// The wind at time `t`: the mean velocity, plus gusts along it and a sway of
+/// its direction, from a fixed sum of sines (deterministic, never negative
+/// gusts).
+pub fn wind_at(w: &WindSection, t: f32) -> Vec3 {
+    use std::f32::consts::TAU;
+    if w.gust_period <= 0.0 || (w.gust == 0.0 && w.sway == 0.0) {
+        return w.velocity;
+    }
+    let p = t / w.gust_period;
+    let gust = w.gust * (0.6 * (TAU * p).sin() + 0.4 * (TAU * 2.3 * p + 1.3).sin()).max(0.0);
+    let sway = w.sway.to_radians() * (TAU * 0.43 * p + 0.7).sin();
+    let dir = w.velocity.try_normalize().unwrap_or(Vec3::X);
+    Quat::from_rotation_z(sway) * (w.velocity + dir * gust)
+}

@@ -1,0 +1,269 @@
+//! Motion scripts: where each body is at time `t`.
+//!
+//! - static: one pose;
+//! - keyframes: linear, eased or stepped (teleporting) between keys;
+//! - car: speed and yaw-rate profiles integrated along a road whose bumps
+//!   and rough stretches lift, pitch and roll the car through a simple
+//!   suspension (a damped spring at each wheel);
+//! - runner: constant speed, a stride bob, a forward lean and abrupt turns.
+//!
+//! Car and runner paths are integrated once, at a fixed rate, into a table
+//! that grows as time advances, so any time is evaluated deterministically.
+//! The world is Z-up; a body's local +X is forward, +Y left.
+
+use glam::{Quat, Vec3};
+
+use super::preset::{BodySection, CarMotion, Interpolation, KeyframeMotion, RunnerMotion, euler};
+use crate::solver::Pose;
+
+/// Rate at which car and runner paths are integrated, in samples per second.
+const PATH_RATE: f32 = 960.0;
+
+/// A body's motion, ready to evaluate.
+#[derive(Clone, Debug)]
+pub enum Motion {
+    /// Never moves.
+    Static(Pose),
+    /// Keyframes.
+    Keyframes(KeyframeMotion),
+    /// A car or a runner.
+    Path(Path),
+}
+
+impl Motion {
+    /// The motion a body section describes (validated).
+    pub fn new(body: &BodySection) -> Self {
+        if let Some(m) = &body.fixed {
+            Motion::Static(Pose::new(m.position, euler(m.rotation)))
+        } else if let Some(m) = &body.keyframes {
+            Motion::Keyframes(m.clone())
+        } else if let Some(m) = &body.car {
+            Motion::Path(Path::new(Driver::Car(m.clone())))
+        } else if let Some(m) = &body.runner {
+            Motion::Path(Path::new(Driver::Runner(m.clone())))
+        } else {
+            Motion::Static(Pose::IDENTITY)
+        }
+    }
+
+    /// The pose at time `t ≥ 0`.
+    pub fn pose(&mut self, t: f32) -> Pose {
+        match self {
+            Motion::Static(p) => *p,
+            Motion::Keyframes(k) => keyframe_pose(k, t),
+            Motion::Path(p) => p.pose(t),
+        }
+    }
+}
+
+fn key_pose(k: &super::preset::Key) -> Pose {
+    Pose::new(k.position, euler(k.rotation))
+}
+
+fn keyframe_pose(m: &KeyframeMotion, t: f32) -> Pose {
+    let keys = &m.keys;
+    let last = keys[keys.len() - 1].t;
+    let t = if m.looped && last > 0.0 { t % last } else { t };
+    let Some(n) = keys.iter().position(|k| k.t > t) else {
+        return key_pose(&keys[keys.len() - 1]);
+    };
+    if n == 0 {
+        return key_pose(&keys[0]);
+    }
+    let (a, b) = (&keys[n - 1], &keys[n]);
+    let u = (t - a.t) / (b.t - a.t);
+    let u = match m.interpolation {
+        Interpolation::Linear => u,
+        Interpolation::Smooth => u * u * (3.0 - 2.0 * u),
+        Interpolation::Step => 0.0,
+    };
+    key_pose(a).lerp(&key_pose(b), u)
+}
+
+/// What drives a path.
+#[derive(Clone, Debug)]
+pub enum Driver {
+    /// A car.
+    Car(CarMotion),
+    /// A runner.
+    Runner(RunnerMotion),
+}
+
+/// One integrated sample of a path.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sample {
+    xy: [f32; 2],
+    heading: f32,
+    distance: f32,
+    /// Car body height over the front, rear, left and right wheels.
+    body: [f32; 4],
+    /// Their vertical velocities.
+    body_v: [f32; 4],
+}
+
+/// Suspension natural frequency (Hz) and damping ratio: the car body follows
+/// the road through a damped spring at each wheel, so a bump lifts it over a
+/// few tenths of a second instead of in one frame.
+const SUSPENSION_HZ: f32 = 1.5;
+const SUSPENSION_DAMPING: f32 = 0.4;
+
+/// A path integrated from speed and heading.
+#[derive(Clone, Debug)]
+pub struct Path {
+    driver: Driver,
+    samples: Vec<Sample>,
+}
+
+/// Piecewise-linear interpolation of `[t, v]` keys, held flat outside them.
+fn profile(keys: &[[f32; 2]], t: f32) -> f32 {
+    match keys.iter().position(|k| k[0] > t) {
+        None => keys.last().map_or(0.0, |k| k[1]),
+        Some(0) => keys[0][1],
+        Some(n) => {
+            let ([t0, v0], [t1, v1]) = (keys[n - 1], keys[n]);
+            v0 + (v1 - v0) * (t - t0) / (t1 - t0)
+        }
+    }
+}
+
+fn smoothstep(u: f32) -> f32 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * (3.0 - 2.0 * u)
+}
+
+impl Path {
+    fn new(driver: Driver) -> Self {
+        let (start, heading) = match &driver {
+            Driver::Car(c) => (c.start, c.heading),
+            Driver::Runner(r) => (r.start, r.heading),
+        };
+        Self {
+            samples: vec![Sample {
+                xy: [start.x, start.y],
+                heading: heading.to_radians(),
+                ..Sample::default()
+            }],
+            driver,
+        }
+    }
+
+    fn speed(&self, t: f32) -> f32 {
+        match &self.driver {
+            Driver::Car(c) => profile(&c.speed, t),
+            Driver::Runner(r) => r.speed,
+        }
+    }
+
+    /// Heading rate (rad/s) for a car; the runner's heading is closed-form.
+    fn heading_at(&self, t: f32, integrated: f32, dt: f32) -> f32 {
+        match &self.driver {
+            Driver::Car(c) => integrated + profile(&c.yaw_rate, t).to_radians() * dt,
+            Driver::Runner(r) => {
+                let turned: f32 = r
+                    .turns
+                    .iter()
+                    .map(|[at, deg]| deg.to_radians() * smoothstep((t - at) / r.turn_time))
+                    .sum();
+                r.heading.to_radians() + turned
+            }
+        }
+    }
+
+    fn extend_to(&mut self, t: f32) {
+        let dt = 1.0 / PATH_RATE;
+        let needed = (t * PATH_RATE).ceil() as usize + 2;
+        while self.samples.len() < needed {
+            let k = self.samples.len() - 1;
+            let s = self.samples[k];
+            let t0 = k as f32 * dt;
+            let tm = t0 + 0.5 * dt;
+            let v = self.speed(tm);
+            let heading = self.heading_at(t0 + dt, s.heading, dt);
+            let mid = 0.5 * (s.heading + heading);
+            let distance = s.distance + v * dt;
+            let (mut body, mut body_v) = (s.body, s.body_v);
+            if let Driver::Car(c) = &self.driver {
+                let (half, lat) = (0.5 * c.wheelbase, 0.5 * c.track);
+                let road = [
+                    road_height(c, distance + half, 0.0),
+                    road_height(c, distance - half, 0.0),
+                    road_height(c, distance, lat),
+                    road_height(c, distance, -lat),
+                ];
+                let w = std::f32::consts::TAU * SUSPENSION_HZ;
+                for k in 0..4 {
+                    let acc =
+                        w * w * (road[k] - body[k]) - 2.0 * SUSPENSION_DAMPING * w * body_v[k];
+                    body_v[k] += acc * dt;
+                    body[k] += body_v[k] * dt;
+                }
+            }
+            self.samples.push(Sample {
+                xy: [s.xy[0] + v * mid.cos() * dt, s.xy[1] + v * mid.sin() * dt],
+                heading,
+                distance,
+                body,
+                body_v,
+            });
+        }
+    }
+
+    fn pose(&mut self, t: f32) -> Pose {
+        let t = t.max(0.0);
+        self.extend_to(t);
+        let f = t * PATH_RATE;
+        let k = (f.floor() as usize).min(self.samples.len() - 2);
+        let u = f - k as f32;
+        let (a, b) = (self.samples[k], self.samples[k + 1]);
+        let x = a.xy[0] + (b.xy[0] - a.xy[0]) * u;
+        let y = a.xy[1] + (b.xy[1] - a.xy[1]) * u;
+        let heading = a.heading + (b.heading - a.heading) * u;
+        let body: [f32; 4] = std::array::from_fn(|k| a.body[k] + (b.body[k] - a.body[k]) * u);
+        match &self.driver {
+            Driver::Car(c) => {
+                let [front, rear, left, right] = body;
+                let pitch = (front - rear).atan2(c.wheelbase);
+                let roll = (left - right).atan2(c.track);
+                let rotation = Quat::from_rotation_z(heading)
+                    * Quat::from_rotation_y(-pitch)
+                    * Quat::from_rotation_x(roll);
+                Pose::new(
+                    Vec3::new(x, y, c.start.z + 0.5 * (front + rear)),
+                    rotation.normalize(),
+                )
+            }
+            Driver::Runner(r) => {
+                let phase = std::f32::consts::PI * r.stride_frequency * t;
+                let z = r.start.z + r.bob * phase.sin().abs();
+                let sway = 0.05 * phase.sin();
+                let rotation = Quat::from_rotation_z(heading)
+                    * Quat::from_rotation_y(r.lean.to_radians())
+                    * Quat::from_rotation_x(sway);
+                Pose::new(Vec3::new(x, y, z), rotation.normalize())
+            }
+        }
+    }
+}
+
+/// Road height at distance `s` along the road and `lateral` metres to the left.
+pub fn road_height(car: &CarMotion, s: f32, lateral: f32) -> f32 {
+    use std::f32::consts::TAU;
+    let mut z = 0.0;
+    for b in &car.road.bumps {
+        let u = (s - b.at) / b.length;
+        if (0.0..=1.0).contains(&u) {
+            z += b.height * 0.5 * (1.0 - (TAU * u).cos());
+        }
+    }
+    for r in &car.road.rough {
+        // Fade in and out over one wavelength so the stretch has no step.
+        let fade = smoothstep((s - r.from) / r.wavelength) * smoothstep((r.to - s) / r.wavelength);
+        if fade > 0.0 {
+            let p = TAU * s / r.wavelength;
+            let q = 1.3 * lateral;
+            z +=
+                r.amplitude * fade * (0.6 * (p + q).sin() + 0.4 * (2.71 * p + 1.1 + 2.0 * q).sin());
+        }
+    }
+    z
+}

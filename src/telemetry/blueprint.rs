@@ -1,0 +1,40 @@
+//! The default layout: the 3D view with the cloth and its corrections beside
+//! plots of violations, strain and energy, and timings.
+
+use rerun::blueprint::{
+    Blueprint, Horizontal, Spatial3DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
+};
+
+use super::paths;
+
+/// The layout a recording opens with.
+pub fn default() -> Blueprint {
+    Blueprint::new(
+        Horizontal::new([
+            Vertical::new([
+                Spatial3DView::new("Cloth").with_origin(paths::WORLD).into(),
+                TextLogView::new("Events").with_origin(paths::EVENTS).into(),
+            ])
+            .with_row_shares([4.0, 1.0])
+            .into(),
+            Vertical::new([
+                TimeSeriesView::new("Violation per family")
+                    .with_origin("metrics/violation")
+                    .into(),
+                TimeSeriesView::new("Strain")
+                    .with_origin("metrics/strain")
+                    .into(),
+                TimeSeriesView::new("Kinetic energy")
+                    .with_origin("metrics/energy")
+                    .into(),
+                TimeSeriesView::new("Timings (ms)")
+                    .with_origin("metrics/time")
+                    .into(),
+            ])
+            .into(),
+        ])
+        .with_column_shares([3.0, 2.0]),
+    )
+    .with_time_panel(TimePanel::new().with_timeline(paths::SIM_TIME))
+    .with_auto_views(false)
+}

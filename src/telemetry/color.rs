@@ -1,0 +1,74 @@
+//! Colours: one per constraint family, and a colour map for particles.
+
+use glam::Vec3;
+use rerun::Color;
+
+use crate::scene::{Scene, preset::ColorBy};
+use crate::solver::Family;
+
+/// The colour of a family, in plots and arrows.
+pub fn family(f: Family) -> Color {
+    match f {
+        Family::Stretch => Color::from_rgb(230, 80, 70),
+        Family::Planarity => Color::from_rgb(70, 170, 230),
+        Family::Normality => Color::from_rgb(120, 200, 90),
+        Family::Curvature => Color::from_rgb(230, 170, 50),
+    }
+}
+
+/// A blue → green → yellow → red ramp for `t ∈ [0, 1]`.
+pub fn ramp(t: f32) -> Color {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let stops = [
+        Vec3::new(40.0, 60.0, 200.0),
+        Vec3::new(40.0, 190.0, 160.0),
+        Vec3::new(150.0, 220.0, 60.0),
+        Vec3::new(250.0, 200.0, 40.0),
+        Vec3::new(230.0, 50.0, 40.0),
+    ];
+    let f = t * (stops.len() - 1) as f32;
+    let k = (f.floor() as usize).min(stops.len() - 2);
+    let c = stops[k].lerp(stops[k + 1], f - k as f32);
+    Color::from_rgb(c.x as u8, c.y as u8, c.z as u8)
+}
+
+/// Per-particle colours for `by`, each scaled to a fixed, documented range
+/// so colours mean the same from frame to frame: strain 0 → 10 %, speed
+/// 0 → 10 m/s, correction 0 → 1 mm.
+pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
+    let solver = scene.solver();
+    let state = solver.state();
+    let n = state.len();
+    match by {
+        ColorBy::None => vec![Color::from_rgb(220, 200, 160); n],
+        ColorBy::Strain => {
+            let mut strain = vec![0.0f32; n];
+            for p in &solver.topology().structural.items {
+                let len = state.position[p.b as usize].distance(state.position[p.a as usize]);
+                let s = ((len - p.rest) / p.rest).max(0.0);
+                strain[p.a as usize] = strain[p.a as usize].max(s);
+                strain[p.b as usize] = strain[p.b as usize].max(s);
+            }
+            strain.iter().map(|s| ramp(s / 0.1)).collect()
+        }
+        ColorBy::Speed => {
+            let dt = solver.params().substep_dt();
+            (0..n)
+                .map(|i| ramp((state.position[i] - state.prev_position[i]).length() / dt / 10.0))
+                .collect()
+        }
+        ColorBy::Correction => match solver.diagnostics() {
+            None => vec![Color::from_rgb(220, 200, 160); n],
+            Some(d) => (0..n)
+                .map(|i| {
+                    let total: f32 = d.families.iter().map(|f| f.dx[i].length()).sum();
+                    ramp(total / 1e-3)
+                })
+                .collect(),
+        },
+    }
+}

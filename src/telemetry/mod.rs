@@ -1,0 +1,426 @@
+//! Telemetry: what a running scene streams to Rerun.
+//!
+//! The solver knows nothing of Rerun; this module reads the scene and the
+//! solver's [`Diagnostics`](crate::solver::Diagnostics) and logs them, in a
+//! few batched entities per frame (never one entity per particle). Entity
+//! paths ([`paths`]):
+//!
+//! | path | what | level |
+//! |---|---|---|
+//! | `world` | Z-up view coordinates | static |
+//! | `world/cloth/particles` | points, coloured by `color_by` | summary |
+//! | `world/cloth/mesh` | the cloth surface | full |
+//! | `world/cloth/normals` | element normals (arrows) | full |
+//! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
+//! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows) | full |
+//! | `world/bodies/{name}` | body transform; its colliders below it | full |
+//! | `world/colliders/{k}` | fixed colliders | static |
+//! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
+//! | `metrics/strain/max`, `metrics/energy/kinetic` | strain, energy | summary |
+//! | `metrics/time/…` | update, adjust per family, collisions, telemetry, total (ms) | summary |
+//! | `params` | solver parameters (TOML), at every change | always |
+//! | `events` | parameter changes, solver failures | always |
+//! | `preset`, `weft`, `cloth/topology` | resolved preset, version, topology | static |
+//!
+//! Timelines: `frame` (sequence) and `sim_time` (seconds).
+
+pub mod blueprint;
+pub mod color;
+pub mod paths;
+pub mod read;
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rerun::{RecordingStream, RecordingStreamResult};
+
+use crate::scene::{
+    Scene,
+    preset::{Level, ShapeKind, TelemetrySettings},
+};
+use crate::solver::{Diagnostics, Family, Params, Pose, StepError};
+
+/// Streams a scene to a Rerun recording.
+pub struct Telemetry {
+    rec: RecordingStream,
+    settings: TelemetrySettings,
+    last_params: Option<Params>,
+    /// Time spent logging the previous frame (reported with the next).
+    last_cost: Duration,
+}
+
+impl Telemetry {
+    /// Telemetry into `rec`, with `settings`.
+    pub fn new(rec: RecordingStream, settings: TelemetrySettings) -> Self {
+        Self {
+            rec,
+            settings,
+            last_params: None,
+            last_cost: Duration::ZERO,
+        }
+    }
+
+    /// The settings in force.
+    pub fn settings(&self) -> &TelemetrySettings {
+        &self.settings
+    }
+
+    /// Changes the settings (e.g. from the tuning panel).
+    pub fn set_settings(&mut self, settings: TelemetrySettings) {
+        self.settings = settings;
+    }
+
+    /// The recording stream.
+    pub fn stream(&self) -> &RecordingStream {
+        &self.rec
+    }
+
+    /// Whether the solver must collect diagnostics for this level.
+    pub fn needs_diagnostics(&self) -> bool {
+        self.settings.level != Level::Off
+    }
+
+    /// Whether frame `frame` is logged.
+    pub fn logs_frame(&self, frame: u64) -> bool {
+        self.settings.level != Level::Off && frame.is_multiple_of(self.settings.log_every as u64)
+    }
+
+    fn set_time(&self, frame: u64, time: f64) {
+        self.rec.set_time_sequence(paths::FRAME, frame as i64);
+        self.rec.set_duration_secs(paths::SIM_TIME, time);
+    }
+
+    /// Logs what never changes: version, resolved preset, topology, colliders
+    /// and series styles. Call once, before the first frame.
+    pub fn log_static(&self, scene: &Scene, resolved_preset: &str) -> RecordingStreamResult<()> {
+        let rec = &self.rec;
+        rec.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
+        rec.log_static(
+            paths::VERSION,
+            &rerun::TextDocument::new(format!("weft {}", env!("CARGO_PKG_VERSION"))),
+        )?;
+        rec.log_static(
+            paths::PRESET,
+            &rerun::TextDocument::new(resolved_preset)
+                .with_media_type(rerun::MediaType::plain_text()),
+        )?;
+        let topo = scene.solver().topology();
+        let pairs = |set: &crate::solver::topology::PairSet| -> Vec<u32> {
+            set.items.iter().flat_map(|p| [p.a, p.b]).collect()
+        };
+        let bends: Vec<u32> = topo
+            .bend
+            .items
+            .iter()
+            .flat_map(|t| [t.a, t.mid, t.b])
+            .collect();
+        let spec = scene.solver().spec();
+        rec.log_static(
+            paths::TOPOLOGY,
+            &rerun::AnyValues::default()
+                .with_component::<rerun::components::Count>("weft", [spec.weft as u64])
+                .with_component::<rerun::components::Count>("warp", [spec.warp as u64])
+                .with_component::<rerun::components::Count>(
+                    "structural",
+                    pairs(&topo.structural).into_iter().map(u64::from),
+                )
+                .with_component::<rerun::components::Count>(
+                    "shear",
+                    pairs(&topo.shear).into_iter().map(u64::from),
+                )
+                .with_component::<rerun::components::Count>(
+                    "bend",
+                    bends.into_iter().map(u64::from),
+                ),
+        )?;
+        let triangles: Vec<[u32; 3]> = topo.triangles.clone();
+        rec.log_static(
+            paths::MESH,
+            &rerun::Mesh3D::update_fields()
+                .with_triangle_indices(triangles)
+                .with_albedo_factor(rerun::Rgba32::from_rgb(200, 170, 120)),
+        )?;
+        self.log_colliders(scene)?;
+        self.log_series_styles()?;
+        Ok(())
+    }
+
+    fn log_colliders(&self, scene: &Scene) -> RecordingStreamResult<()> {
+        for (k, c) in scene.preset().colliders.iter().enumerate() {
+            let path = match &c.body {
+                Some(b) => paths::body_collider(b, k),
+                None => paths::world_collider(k),
+            };
+            let rotation = crate::scene::preset::euler(c.rotation);
+            let colour = rerun::Color::from_unmultiplied_rgba(120, 140, 170, 160);
+            match c.shape {
+                ShapeKind::Plane => {
+                    let pose = Pose::new(c.position, rotation);
+                    let s = 10.0;
+                    let corners = [[-s, -s], [s, -s], [s, s], [-s, s]]
+                        .map(|[x, y]| pose.transform_point(Vec3::new(x, y, 0.0)));
+                    self.rec.log_static(
+                        path,
+                        &rerun::Mesh3D::new(corners)
+                            .with_triangle_indices([[0, 1, 2], [0, 2, 3]])
+                            .with_albedo_factor(rerun::Rgba32::from_unmultiplied_rgba(
+                                90, 100, 90, 255,
+                            )),
+                    )?;
+                }
+                ShapeKind::Sphere => self.rec.log_static(
+                    path,
+                    &rerun::Ellipsoids3D::from_centers_and_radii(
+                        [c.position],
+                        [c.radius.unwrap_or(0.0)],
+                    )
+                    .with_colors([colour])
+                    .with_fill_mode(rerun::FillMode::Solid),
+                )?,
+                ShapeKind::Capsule => {
+                    let h = c.half_length.unwrap_or(0.0);
+                    let axis = rotation * Vec3::Z * h;
+                    self.rec.log_static(
+                        path,
+                        &rerun::Capsules3D::from_endpoints_and_radii(
+                            [c.position - axis],
+                            [c.position + axis],
+                            [c.radius.unwrap_or(0.0)],
+                        )
+                        .with_colors([colour]),
+                    )?
+                }
+                ShapeKind::Box => self.rec.log_static(
+                    path,
+                    &rerun::Boxes3D::from_centers_and_half_sizes(
+                        [c.position],
+                        [c.half_extents.unwrap_or(Vec3::ZERO)],
+                    )
+                    .with_quaternions([rotation])
+                    .with_colors([colour])
+                    .with_fill_mode(rerun::FillMode::Solid),
+                )?,
+            }
+        }
+        Ok(())
+    }
+
+    fn log_series_styles(&self) -> RecordingStreamResult<()> {
+        for f in Family::ALL {
+            let c = color::family(f);
+            self.rec.log_static(
+                paths::violation(f, "max"),
+                &rerun::SeriesLines::new()
+                    .with_colors([c])
+                    .with_names([format!("{} max", f.name())]),
+            )?;
+            self.rec.log_static(
+                paths::violation(f, "rms"),
+                &rerun::SeriesLines::new()
+                    .with_colors([c])
+                    .with_names([format!("{} rms", f.name())])
+                    .with_widths([0.5]),
+            )?;
+            self.rec.log_static(
+                paths::adjust_time(f),
+                &rerun::SeriesLines::new()
+                    .with_colors([c])
+                    .with_names([format!("adjust {}", f.name())]),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Logs the parameters if they differ from the last logged ones, at the
+    /// current frame, with an event naming what changed.
+    pub fn log_params(
+        &mut self,
+        frame: u64,
+        time: f64,
+        params: &Params,
+    ) -> RecordingStreamResult<()> {
+        if self.last_params.as_ref() == Some(params) {
+            return Ok(());
+        }
+        self.set_time(frame, time);
+        let text = toml::to_string(params).expect("parameters serialize");
+        self.rec.log(
+            paths::PARAMS,
+            &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
+        )?;
+        let message = match &self.last_params {
+            None => "initial parameters".to_string(),
+            Some(old) => format!("parameters changed: {}", describe_changes(old, params)),
+        };
+        self.rec.log(
+            paths::EVENTS,
+            &rerun::TextLog::new(message).with_level(rerun::TextLogLevel::INFO),
+        )?;
+        self.last_params = Some(*params);
+        Ok(())
+    }
+
+    /// Logs a solver failure at the frame it happened.
+    pub fn log_failure(
+        &self,
+        frame: u64,
+        time: f64,
+        error: &StepError,
+    ) -> RecordingStreamResult<()> {
+        self.set_time(frame, time);
+        self.rec.log(
+            paths::EVENTS,
+            &rerun::TextLog::new(error.to_string()).with_level(rerun::TextLogLevel::ERROR),
+        )
+    }
+
+    /// Logs one frame of the scene, as the settings ask.
+    pub fn log_frame(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
+        let frame = scene.frame();
+        if !self.logs_frame(frame) {
+            return Ok(());
+        }
+        let start = Instant::now();
+        self.set_time(frame, scene.time());
+        let solver = scene.solver();
+        let diag = solver.diagnostics();
+        let x = &solver.state().position;
+        let rec = &self.rec;
+
+        // Scalars.
+        if let Some(d) = diag {
+            for f in Family::ALL {
+                let v = d.family(f).violation;
+                rec.log(
+                    paths::violation(f, "max"),
+                    &rerun::Scalars::single(v.max as f64),
+                )?;
+                rec.log(
+                    paths::violation(f, "rms"),
+                    &rerun::Scalars::single(v.rms as f64),
+                )?;
+                rec.log(
+                    paths::adjust_time(f),
+                    &rerun::Scalars::single(ms(d.family(f).time)),
+                )?;
+            }
+            rec.log(paths::STRAIN, &rerun::Scalars::single(d.max_strain as f64))?;
+            rec.log(
+                paths::ENERGY,
+                &rerun::Scalars::single(d.kinetic_energy as f64),
+            )?;
+            rec.log(
+                paths::TIME_UPDATE,
+                &rerun::Scalars::single(ms(d.timings.update)),
+            )?;
+            rec.log(
+                paths::TIME_COLLISIONS,
+                &rerun::Scalars::single(ms(d.timings.collisions)),
+            )?;
+            rec.log(
+                paths::TIME_TOTAL,
+                &rerun::Scalars::single(ms(d.timings.total)),
+            )?;
+            rec.log(
+                paths::TIME_TELEMETRY,
+                &rerun::Scalars::single(ms(self.last_cost)),
+            )?;
+        }
+
+        // Particles.
+        let colours = color::particles(self.settings.color_by, scene);
+        let radius = 0.25 * solver.spec().spacing().0.min(solver.spec().spacing().1);
+        rec.log(
+            paths::PARTICLES,
+            &rerun::Points3D::new(x.iter().copied())
+                .with_colors(colours.iter().copied())
+                .with_radii([radius]),
+        )?;
+
+        if self.settings.level == Level::Full {
+            let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
+            rec.log(
+                paths::MESH,
+                &rerun::Mesh3D::update_fields()
+                    .with_vertex_positions(x.iter().copied())
+                    .with_vertex_normals(normals.iter().copied()),
+            )?;
+            let len = 2.0 * radius;
+            rec.log(
+                paths::NORMALS,
+                &rerun::Arrows3D::from_vectors(normals.iter().map(|n| *n * len))
+                    .with_origins(x.iter().copied())
+                    .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
+            )?;
+            if let Some(d) = diag {
+                self.log_corrections(x, d)?;
+            }
+            for (name, pose) in scene.body_names().zip(scene.body_poses()) {
+                rec.log(
+                    paths::body(name),
+                    &rerun::Transform3D::from_translation_rotation(pose.translation, pose.rotation),
+                )?;
+            }
+        }
+        self.last_cost = start.elapsed();
+        Ok(())
+    }
+
+    fn log_corrections(&self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
+        let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
+        for f in Family::ALL {
+            let fd = d.family(f);
+            for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
+                let (origins, arrows): (Vec<Vec3>, Vec<Vec3>) = vectors
+                    .iter()
+                    .zip(x)
+                    .filter(|(v, _)| v.length() >= threshold && v.length() > 0.0)
+                    .map(|(v, o)| (*o, *v * scale))
+                    .unzip();
+                self.rec.log(
+                    paths::correction(f, kind),
+                    &rerun::Arrows3D::from_vectors(arrows)
+                        .with_origins(origins)
+                        .with_colors([color::family(f)]),
+                )?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Flushes everything logged so far (to the file or viewer).
+    pub fn flush(&self) -> Result<(), rerun::sink::SinkFlushError> {
+        self.rec.flush_blocking()
+    }
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+/// "weights.curvature 0.1 → 0.3, iterations 10 → 12".
+pub fn describe_changes(old: &Params, new: &Params) -> String {
+    let a: toml::Table = toml::Table::try_from(old).expect("parameters serialize");
+    let b: toml::Table = toml::Table::try_from(new).expect("parameters serialize");
+    let mut changes = Vec::new();
+    diff("", &a, &b, &mut changes);
+    if changes.is_empty() {
+        "none".into()
+    } else {
+        changes.join(", ")
+    }
+}
+
+fn diff(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut Vec<String>) {
+    for (k, vb) in b {
+        let key = format!("{prefix}{k}");
+        match (a.get(k), vb) {
+            (Some(toml::Value::Table(ta)), toml::Value::Table(tb)) => {
+                diff(&format!("{key}."), ta, tb, out)
+            }
+            (Some(va), vb) if va == vb => {}
+            (Some(va), vb) => out.push(format!("{key} {va} → {vb}")),
+            (None, vb) => out.push(format!("{key} → {vb}")),
+        }
+    }
+}

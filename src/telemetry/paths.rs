@@ -1,0 +1,71 @@
+//! Entity paths and timeline names, in one place.
+
+use crate::solver::Family;
+
+/// Sequence timeline: frame number.
+pub const FRAME: &str = "frame";
+/// Duration timeline: simulated seconds.
+pub const SIM_TIME: &str = "sim_time";
+
+/// Root of the 3D scene.
+pub const WORLD: &str = "world";
+/// Particles.
+pub const PARTICLES: &str = "world/cloth/particles";
+/// The cloth surface.
+pub const MESH: &str = "world/cloth/mesh";
+/// Element normals.
+pub const NORMALS: &str = "world/cloth/normals";
+/// Static topology (index arrays).
+pub const TOPOLOGY: &str = "cloth/topology";
+/// Solver parameters, logged at every change.
+pub const PARAMS: &str = "params";
+/// Parameter changes and failures.
+pub const EVENTS: &str = "events";
+/// The resolved preset (static).
+pub const PRESET: &str = "preset";
+/// The weft version (static).
+pub const VERSION: &str = "weft";
+/// End-of-run summary (static): frames, final-state hash.
+pub const SUMMARY: &str = "summary";
+/// Largest edge strain.
+pub const STRAIN: &str = "metrics/strain/max";
+/// Kinetic energy.
+pub const ENERGY: &str = "metrics/energy/kinetic";
+/// Update phase wall time.
+pub const TIME_UPDATE: &str = "metrics/time/update";
+/// Collisions wall time.
+pub const TIME_COLLISIONS: &str = "metrics/time/collisions";
+/// Telemetry wall time (of the previous logged frame).
+pub const TIME_TELEMETRY: &str = "metrics/time/telemetry";
+/// Whole step wall time.
+pub const TIME_TOTAL: &str = "metrics/time/total";
+
+/// `metrics/violation/{family}/{stat}`.
+pub fn violation(f: Family, stat: &str) -> String {
+    format!("metrics/violation/{}/{stat}", f.name())
+}
+
+/// `metrics/time/adjust/{family}`.
+pub fn adjust_time(f: Family) -> String {
+    format!("metrics/time/adjust/{}", f.name())
+}
+
+/// `world/corrections/{family}/{dx|dtheta}`.
+pub fn correction(f: Family, kind: &str) -> String {
+    format!("world/corrections/{}/{kind}", f.name())
+}
+
+/// `world/bodies/{name}`.
+pub fn body(name: &str) -> String {
+    format!("world/bodies/{name}")
+}
+
+/// `world/bodies/{name}/colliders/{k}`.
+pub fn body_collider(name: &str, k: usize) -> String {
+    format!("world/bodies/{name}/colliders/{k}")
+}
+
+/// `world/colliders/{k}`.
+pub fn world_collider(k: usize) -> String {
+    format!("world/colliders/{k}")
+}

@@ -1,0 +1,168 @@
+//! Reading a recording back: entity paths, frames, array lengths, and the
+//! texts weft stores (preset, parameters, summary, events).
+//!
+//! Used by `weft replay` and by tests, with Rerun's own decoder.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use rerun::external::re_log_encoding::DecoderApp;
+use rerun::log::{Chunk, LogMsg};
+
+use super::paths;
+
+/// What one entity holds in a recording.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EntityInfo {
+    /// Whether any of it is static.
+    pub is_static: bool,
+    /// Component names (e.g. `Points3D:positions`).
+    pub components: BTreeSet<String>,
+    /// Values on the `frame` timeline at which it was logged.
+    pub frames: BTreeSet<i64>,
+    /// Values on the `sim_time` timeline, in nanoseconds.
+    pub sim_times: BTreeSet<i64>,
+    /// Length of each logged row's main array (positions, vectors, scalars…), in frame order.
+    pub lengths: Vec<usize>,
+}
+
+/// The contents of a recording, as weft wrote them.
+#[derive(Clone, Debug, Default)]
+pub struct Recording {
+    /// Every entity, by path (without the leading `/`).
+    pub entities: BTreeMap<String, EntityInfo>,
+    /// The resolved preset.
+    pub preset: Option<String>,
+    /// Parameter sets (TOML) by the frame they took effect.
+    pub params: Vec<(i64, String)>,
+    /// Event messages by frame.
+    pub events: Vec<(i64, String)>,
+    /// The end-of-run summary, if the run finished.
+    pub summary: Option<String>,
+    /// Particle positions at the last logged frame.
+    pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
+}
+
+/// The main array of a chunk's rows: the first component whose name is one
+/// of these, else the first component.
+const MAIN: [&str; 5] = [
+    ":positions",
+    ":vectors",
+    ":scalars",
+    ":vertex_positions",
+    ":text",
+];
+
+/// Reads a `.rrd` file. A file cut short (by a crash) reads up to its last
+/// complete message.
+pub fn read(path: &Path) -> Result<Recording, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
+        .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
+    let mut out = Recording::default();
+    for msg in decoder {
+        let msg = match msg {
+            Ok(m) => m,
+            // A truncated tail: keep what was read.
+            Err(_) => break,
+        };
+        let LogMsg::ArrowMsg(store, arrow) = msg else {
+            continue;
+        };
+        if !store.is_recording() {
+            continue;
+        }
+        let chunk = Chunk::from_arrow_msg(&arrow)
+            .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
+        absorb(&mut out, &chunk);
+    }
+    Ok(out)
+}
+
+fn absorb(out: &mut Recording, chunk: &Chunk) {
+    let path = chunk
+        .entity_path()
+        .to_string()
+        .trim_start_matches('/')
+        .to_string();
+    let rows = chunk.num_rows();
+    let frames: Vec<i64> = chunk
+        .timelines()
+        .get(&paths::FRAME.into())
+        .map(|c| c.times_raw().to_vec())
+        .unwrap_or_else(|| vec![-1; rows]);
+    let info = out.entities.entry(path.clone()).or_default();
+    info.is_static |= chunk.is_static();
+    info.frames.extend(frames.iter().filter(|f| **f >= 0));
+    if let Some(c) = chunk.timelines().get(&paths::SIM_TIME.into()) {
+        info.sim_times.extend(c.times_raw().iter().copied());
+    }
+    let components = chunk.components();
+    let mut main = None;
+    for (ident, col) in components.iter() {
+        let name = ident.as_str().to_string();
+        let preferred = MAIN.iter().any(|m| name.ends_with(m));
+        if main.is_none() || preferred {
+            main = Some(col);
+        }
+        info.components.insert(name);
+        if preferred {
+            break;
+        }
+    }
+    if let Some(col) = main {
+        use rerun::external::arrow::array::Array as _;
+        let offsets = col.list_array.offsets();
+        for r in 0..col.list_array.len() {
+            info.lengths.push((offsets[r + 1] - offsets[r]) as usize);
+        }
+    }
+    for (ident, _) in components.iter() {
+        info.components.insert(ident.as_str().to_string());
+    }
+
+    let texts = |descriptor: rerun::ComponentIdentifier| -> Vec<String> {
+        chunk
+            .iter_component::<rerun::components::Text>(descriptor)
+            .map(|row| {
+                row.first()
+                    .map(|t| t.as_str().to_string())
+                    .unwrap_or_default()
+            })
+            .collect()
+    };
+    match path.as_str() {
+        paths::PRESET => out.preset = texts(rerun::TextDocument::descriptor_text().component).pop(),
+        paths::SUMMARY => {
+            out.summary = texts(rerun::TextDocument::descriptor_text().component).pop()
+        }
+        paths::PARAMS => out.params.extend(
+            frames
+                .iter()
+                .copied()
+                .zip(texts(rerun::TextDocument::descriptor_text().component)),
+        ),
+        paths::EVENTS => out.events.extend(
+            frames
+                .iter()
+                .copied()
+                .zip(texts(rerun::TextLog::descriptor_text().component)),
+        ),
+        paths::PARTICLES => {
+            let positions = chunk.iter_component::<rerun::components::Position3D>(
+                rerun::Points3D::descriptor_positions().component,
+            );
+            for (frame, row) in frames.iter().zip(positions) {
+                if out
+                    .last_positions
+                    .as_ref()
+                    .is_none_or(|(f, _)| *frame >= *f)
+                {
+                    out.last_positions =
+                        Some((*frame, row.iter().map(|p| [p.x(), p.y(), p.z()]).collect()));
+                }
+            }
+        }
+        _ => {}
+    }
+}
