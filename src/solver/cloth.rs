@@ -248,3 +248,28 @@ pub fn normal_of(q: Quat) -> Vec3 {
         1.0 - 2.0 * (q.x * q.x + q.y * q.y),
     )
 }
+
+/// Rotates `q` by the rotation vector `r` (axis × angle), exactly.
+///
+/// Small angles, by far the most common, use the half-angle series of
+/// `(cos ½θ, sin ½θ · axis)` to fourth order (error below 1e-9 for
+/// θ < 0.05), avoiding the trigonometric calls. A non-finite `r` gives a
+/// non-finite quaternion (never a panic), for the step to report.
+#[inline]
+pub fn rotate(q: Quat, r: Vec3) -> Quat {
+    let t2 = r.length_squared();
+    let d = if t2 < 0.0025 {
+        // cos(θ/2) ≈ 1 − θ²/8 + θ⁴/384,  sin(θ/2)/θ ≈ ½ − θ²/48 + θ⁴/3840
+        let c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0;
+        let s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0;
+        Quat::from_xyzw(r.x * s, r.y * s, r.z * s, c)
+    } else if t2.is_finite() {
+        let t = t2.sqrt();
+        let (s, c) = (0.5 * t).sin_cos();
+        let r = r * (s / t);
+        Quat::from_xyzw(r.x, r.y, r.z, c)
+    } else {
+        return Quat::from_xyzw(f32::NAN, f32::NAN, f32::NAN, f32::NAN);
+    };
+    (d * q).normalize()
+}

@@ -118,11 +118,13 @@ pub struct Attachment {
 pub enum StepError {
     /// The state turned non-finite; the last good state was kept.
     #[error(
-        "step {step}: particle {particle} has a non-finite {quantity} {value}; the last good state was kept"
+        "step {step} ({phase} phase): particle {particle} has a non-finite {quantity} {value}; the last good state was kept"
     )]
     NonFinite {
         /// Number of the failed step (the first step is 1).
         step: u64,
+        /// `update` or `adjust`: where it was first seen.
+        phase: &'static str,
         /// The first particle found non-finite.
         particle: usize,
         /// `position` or `orientation`.
@@ -452,11 +454,11 @@ impl Solver {
                 self.sub_from.push(from.lerp(to, f0));
                 self.sub_to.push(from.lerp(to, f1));
             }
-            self.substep(env, dt, &rot);
-            if let Err((particle, quantity, value)) = self.check_finite() {
+            if let Err((phase, particle, quantity, value)) = self.substep(env, dt, &rot) {
                 self.state.copy_from(&self.last_good);
                 return Err(StepError::NonFinite {
                     step,
+                    phase,
                     particle,
                     quantity,
                     value,
@@ -478,7 +480,15 @@ impl Solver {
         Ok(())
     }
 
-    fn substep(&mut self, env: &Environment, dt: f32, rot: &ForcedRotation) {
+    /// One substep. A non-finite state is checked for after the update
+    /// (where a bad input shows at its own particle, before the constraints
+    /// spread it) and after the adjust.
+    fn substep(
+        &mut self,
+        env: &Environment,
+        dt: f32,
+        rot: &ForcedRotation,
+    ) -> Result<(), NonFinite> {
         let t = self.diagnostics.is_some().then(Instant::now);
         update::integrate(
             &mut self.state,
@@ -490,6 +500,7 @@ impl Solver {
             dt,
         );
         self.drive_attachments();
+        self.check_finite("update")?;
         if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
             d.timings.update += t.elapsed();
             d.clear_corrections();
@@ -567,6 +578,7 @@ impl Solver {
                 &self.contacts,
             );
         }
+        self.check_finite("adjust")
     }
 
     /// Puts every driven particle where its body holds it at the substep's end.
@@ -583,19 +595,22 @@ impl Solver {
         }
     }
 
-    fn check_finite(&self) -> Result<(), (usize, &'static str, String)> {
+    fn check_finite(&self, phase: &'static str) -> Result<(), NonFinite> {
         let s = &self.state;
         for i in 0..s.len() {
             if !s.position[i].is_finite() {
-                return Err((i, "position", format!("{}", s.position[i])));
+                return Err((phase, i, "position", format!("{}", s.position[i])));
             }
             if !s.orientation[i].is_finite() {
-                return Err((i, "orientation", format!("{}", s.orientation[i])));
+                return Err((phase, i, "orientation", format!("{}", s.orientation[i])));
             }
         }
         Ok(())
     }
 }
+
+/// Where a state turned non-finite: phase, particle, quantity, value.
+type NonFinite = (&'static str, usize, &'static str, String);
 
 /// Projects every pair of one family once, colour batch by colour batch.
 fn project_family<R: Recorder>(

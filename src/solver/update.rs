@@ -19,9 +19,9 @@
 //! substep is capped at the relative velocity itself, so a light element is
 //! carried along by the wind instead of overshooting it.
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
 
-use super::cloth::{ClothState, normal_of};
+use super::cloth::{ClothState, normal_of, rotate};
 
 /// What acts on the cloth from outside, constant over one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -102,8 +102,19 @@ pub(crate) fn integrate(
                 turn = -turn;
             }
             state.prev_orientation[i] = q;
-            state.orientation[i] =
-                (Quat::from_scaled_axis(turn.to_scaled_axis() * damping) * q).normalize();
+            state.orientation[i] = rotate(q, rotation_vector(turn) * damping);
         }
     }
+}
+
+/// The rotation vector (axis × angle) of a unit quaternion with `w ≥ 0`.
+/// Unlike glam's, it never asserts: a NaN stays a NaN for the step to report.
+#[inline]
+fn rotation_vector(q: glam::Quat) -> Vec3 {
+    let v = Vec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    if !(s > 1e-9) {
+        return v * 2.0;
+    }
+    v * (2.0 * s.atan2(q.w) / s)
 }

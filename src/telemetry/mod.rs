@@ -287,8 +287,8 @@ impl Telemetry {
         let x = &solver.state().position;
         let rec = &self.rec;
 
-        // Scalars.
-        if let Some(d) = diag {
+        // Scalars (none before the first step: there is nothing to measure).
+        if let Some(d) = diag.filter(|_| frame > 0) {
             for f in Family::ALL {
                 let v = d.family(f).violation;
                 rec.log(

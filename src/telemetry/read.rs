@@ -22,7 +22,7 @@ pub struct EntityInfo {
     pub frames: BTreeSet<i64>,
     /// Values on the `sim_time` timeline, in nanoseconds.
     pub sim_times: BTreeSet<i64>,
-    /// Length of each logged row's main array (positions, vectors, scalars…), in frame order.
+    /// Length of each temporal row's main array (positions, vectors, scalars…), in frame order.
     pub lengths: Vec<usize>,
 }
 
@@ -110,7 +110,7 @@ fn absorb(out: &mut Recording, chunk: &Chunk) {
             break;
         }
     }
-    if let Some(col) = main {
+    if let Some(col) = main.filter(|_| !chunk.is_static()) {
         use rerun::external::arrow::array::Array as _;
         let offsets = col.list_array.offsets();
         for r in 0..col.list_array.len() {

@@ -23,7 +23,7 @@ pub mod stretch;
 
 use glam::{Quat, Vec3};
 
-use super::forced_rotation::ForcedRotation;
+use super::{cloth::rotate, forced_rotation::ForcedRotation};
 
 /// Mutable views of what a projection reads and writes.
 pub(crate) struct Particles<'a> {
@@ -63,11 +63,13 @@ pub(crate) fn turn<R: Recorder>(
     rec: &mut R,
 ) {
     let full = omega.length();
-    if full <= 1e-12 {
+    // Written so that NaN also returns: a non-finite state is reported by
+    // the step, never turned into a panic here.
+    if !(full > 1e-12) {
         return;
     }
     let angle = rot.angle(full);
-    if angle <= 0.0 {
+    if !(angle > 0.0) {
         return;
     }
     let axis = omega / full;
@@ -84,23 +86,4 @@ pub(crate) fn shift<R: Recorder>(p: &mut Particles, i: usize, dx: Vec3, rec: &mu
     if R::ON {
         rec.moved(i, dx);
     }
-}
-
-/// Rotates `q` by the rotation vector `r` (axis × angle), exactly.
-///
-/// Small angles, by far the most common, use the half-angle series of
-/// `(cos ½θ, sin ½θ · axis)` to fourth order (error below 1e-9 for
-/// θ < 0.05), avoiding the trigonometric calls.
-#[inline]
-pub(crate) fn rotate(q: Quat, r: Vec3) -> Quat {
-    let t2 = r.length_squared();
-    let d = if t2 < 0.0025 {
-        // cos(θ/2) ≈ 1 − θ²/8 + θ⁴/384,  sin(θ/2)/θ ≈ ½ − θ²/48 + θ⁴/3840
-        let c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0;
-        let s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0;
-        Quat::from_xyzw(r.x * s, r.y * s, r.z * s, c)
-    } else {
-        Quat::from_scaled_axis(r)
-    };
-    (d * q).normalize()
 }
