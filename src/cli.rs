@@ -16,14 +16,20 @@ use crate::telemetry::{Telemetry, blueprint};
 #[derive(Debug, Parser)]
 #[command(name = "weft", version, about, long_about = None)]
 pub struct Cli {
-    /// What to do.
+    /// What to do (default: open the desktop debugger on flag_on_car).
     #[command(subcommand)]
-    pub command: Command,
+    pub command: Option<Command>,
 }
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Open the desktop debugger: the Rerun viewer and a tuning panel in one window.
+    Gui {
+        /// Preset file or shipped preset name.
+        #[arg(default_value = "flag_on_car")]
+        preset: String,
+    },
     /// List the shipped presets with a one-line description each.
     Presets,
     /// Validate preset files (or shipped names); exits non-zero if any is invalid.
@@ -123,7 +129,11 @@ impl RecordArgs {
 
 /// Runs a parsed command line; returns the process exit code.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
-    match cli.command {
+    let command = cli.command.unwrap_or(Command::Gui {
+        preset: "flag_on_car".into(),
+    });
+    match command {
+        Command::Gui { preset } => gui(&preset),
         Command::Presets => {
             let width = shipped::ALL.iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in shipped::ALL {
@@ -159,10 +169,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Show { preset, set } => {
             let loaded = load::load(&preset, &set)?;
-            print!(
-                "{}",
-                toml::to_string(&loaded.preset).context("serializing the preset")?
-            );
+            print!("{}", load::to_toml(&loaded.preset));
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
@@ -193,6 +200,19 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     }
 }
 
+#[cfg(feature = "viewer")]
+fn gui(preset: &str) -> anyhow::Result<ExitCode> {
+    crate::app::run(preset)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn gui(_preset: &str) -> anyhow::Result<ExitCode> {
+    anyhow::bail!(
+        "this weft was built without the desktop debugger (feature `viewer`); rebuild with default features"
+    )
+}
+
 fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     let loaded = load::load(&args.preset, &args.overrides())?;
     let preset = &loaded.preset;
@@ -218,10 +238,15 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
         })?;
     }
 
+    // The first Ctrl-C stops after the current frame and closes the file
+    // cleanly; a second one quits at once.
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    // A second Ctrl-C while closing the file is left to the default handler.
-    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
+    let _ = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::Relaxed) {
+            std::process::exit(130);
+        }
+    });
 
     let bar = indicatif::ProgressBar::new(frames).with_style(
         indicatif::ProgressStyle::with_template(

@@ -7,9 +7,13 @@
 //! - [`record`], [`replay`]: headless runs with CI verdicts, and their
 //!   bit-for-bit reproduction.
 //! - [`cli`]: the `weft` command line.
+//! - `app` (feature `viewer`, on by default): the desktop debugger, the Rerun
+//!   viewer embedded beside an egui tuning panel.
 //!
 //! See `ARCHITECTURE.md` for the map of the crate.
 
+#[cfg(feature = "viewer")]
+pub mod app;
 pub mod cli;
 pub mod record;
 pub mod replay;

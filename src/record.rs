@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::scene::{Scene, preset::Expect};
+use crate::scene::{Scene, Tuning, preset::Expect};
 use crate::solver::{Family, Params, StepError};
 use crate::telemetry::{Telemetry, paths};
 
@@ -146,8 +146,8 @@ impl Run {
             wall: std::time::Duration::ZERO,
         };
         run.telemetry.log_static(&run.scene, resolved)?;
-        let params = *run.scene.solver().params();
-        run.telemetry.log_params(0, 0.0, &params)?;
+        let tuning = run.scene.tuning();
+        run.telemetry.log_tuning(0, 0.0, &tuning)?;
         run.telemetry.log_frame(&run.scene)?;
         Ok(run)
     }
@@ -158,13 +158,18 @@ impl Run {
         self.scene.set_params(params)
     }
 
+    /// Applies new live settings (parameters and wind) from the next step on.
+    pub fn set_tuning(&mut self, tuning: &Tuning) -> Result<(), crate::solver::ParamError> {
+        self.scene.set_tuning(tuning)
+    }
+
     /// Steps one frame and logs it.
     pub fn step(&mut self) -> Result<(), RunError> {
         let start = Instant::now();
         let frame = self.scene.frame() + 1;
         let time = self.scene.time() + self.scene.solver().params().dt as f64;
-        let params = *self.scene.solver().params();
-        self.telemetry.log_params(frame, time, &params)?;
+        let tuning = self.scene.tuning();
+        self.telemetry.log_tuning(frame, time, &tuning)?;
         if let Err(error) = self.scene.step() {
             self.figures.finite = false;
             self.figures.failure = Some(error.to_string());

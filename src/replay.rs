@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-use crate::scene::{Scene, load};
-use crate::solver::Params;
+use crate::scene::{Scene, Tuning, load};
 use crate::telemetry::read;
 
 /// What a replay found.
@@ -55,17 +54,17 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
     let last_logged = rec.last_positions.as_ref().map(|(f, _)| *f as u64);
     let frames = recorded_frames.or(last_logged).unwrap_or(0);
 
-    let mut changes: Vec<(u64, Params)> = Vec::new();
+    let mut changes: Vec<(u64, Tuning)> = Vec::new();
     for (frame, text) in &rec.params {
-        let params: Params =
+        let tuning: Tuning =
             toml::from_str(text).map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
-        changes.push((*frame as u64, params));
+        changes.push((*frame as u64, tuning));
     }
     let mut scene = Scene::new(&preset).map_err(|e| e.to_string())?;
     let apply = |scene: &mut Scene, frame: u64| -> Result<(), String> {
         for (_, p) in changes.iter().filter(|(f, _)| *f == frame) {
             scene
-                .set_params(*p)
+                .set_tuning(p)
                 .map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
         }
         Ok(())

@@ -534,3 +534,38 @@ fn every_rejected_parameter_has_its_own_message() {
             .contains("cloth.weft")
     );
 }
+
+#[test]
+fn results_are_bit_identical_for_any_thread_count() {
+    // Big enough that colour batches are split across threads.
+    let spec = ClothSpec {
+        weft: 96,
+        warp: 96,
+        ..ClothSpec::default()
+    };
+    let run = |threads: usize, diagnostics: bool| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut s = Solver::new(spec, Params::default(), &[Pose::IDENTITY]).unwrap();
+            s.attach(spec.index(0, 95), 0);
+            s.attach(spec.index(95, 95), 0);
+            s.set_diagnostics(diagnostics);
+            for step in 1..=4 {
+                s.step(&Environment::default(), &[jerk_pose(step, 1.0 / 60.0)])
+                    .unwrap();
+            }
+            (
+                s.state().digest(),
+                s.diagnostics()
+                    .map(|d| d.family(Family::Curvature).max_rotation),
+            )
+        })
+    };
+    let one = run(1, true);
+    assert_eq!(one, run(2, true));
+    assert_eq!(one, run(3, true));
+    assert_eq!(one.0, run(2, false).0);
+}

@@ -252,7 +252,28 @@ pub fn load_origin(origin: &Origin, overrides: &[Override]) -> Result<Loaded, Pr
     preset
         .validate()
         .map_err(|inv| locate(&inv.key, inv.message, None))?;
-    let resolved = toml::to_string(&table).expect("a TOML table serializes");
+    let resolved = to_toml(&table);
+    Ok(Loaded { preset, resolved })
+}
+
+/// Applies overrides to an already loaded preset and validates the result,
+/// as `--set` does (used by the tuning panel).
+pub fn with_overrides(preset: &Preset, overrides: &[Override]) -> Result<Loaded, PresetError> {
+    let mut table = Table::try_from(preset).expect("a preset serializes");
+    for o in overrides {
+        set(&mut table, o).map_err(|message| PresetError {
+            key: Some(o.key.clone()),
+            ..PresetError::plain(format!("--set {}", o.key), message)
+        })?;
+    }
+    let preset: Preset = serde_path_to_error::deserialize(table.clone()).map_err(|e| {
+        let (message, hint) = explain(e.inner().message());
+        locate_error(&[], overrides, &e.path().to_string(), message, hint)
+    })?;
+    preset
+        .validate()
+        .map_err(|inv| locate_error(&[], overrides, &inv.key, inv.message, None))?;
+    let resolved = to_toml(&table);
     Ok(Loaded { preset, resolved })
 }
 
@@ -546,4 +567,30 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
         .map_or(before.len(), |i| before.len() - i - 1)
         + 1;
     (line, col)
+}
+
+/// TOML text for `value`, with every float that is exactly an `f32` written
+/// in its shortest form (`0.35`, not `0.3499999940395355`) when that form
+/// reads back to the same `f32`, so saved presets stay readable and exact.
+pub fn to_toml<T: serde::Serialize>(value: &T) -> String {
+    let mut v = Value::try_from(value).expect("weft's settings serialize to TOML");
+    tidy_floats(&mut v);
+    toml::to_string(&v).expect("a TOML value serializes")
+}
+
+fn tidy_floats(v: &mut Value) {
+    match v {
+        Value::Float(f) => {
+            let single = *f as f32;
+            if single as f64 == *f
+                && let Ok(short) = single.to_string().parse::<f64>()
+                && short as f32 == single
+            {
+                *f = short;
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(tidy_floats),
+        Value::Table(t) => t.iter_mut().for_each(|(_, v)| tidy_floats(v)),
+        _ => {}
+    }
 }

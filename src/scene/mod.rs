@@ -140,6 +140,26 @@ impl Scene {
         Ok(())
     }
 
+    /// Replaces the wind from the next step on.
+    pub fn set_wind(&mut self, wind: WindSection) {
+        self.preset.environment.wind = wind;
+    }
+
+    /// The live-tunable settings: solver parameters and wind.
+    pub fn tuning(&self) -> Tuning {
+        Tuning {
+            solver: *self.solver.params(),
+            wind: self.preset.environment.wind,
+        }
+    }
+
+    /// Applies live-tunable settings from the next step on.
+    pub fn set_tuning(&mut self, tuning: &Tuning) -> Result<(), ParamError> {
+        self.set_params(tuning.solver)?;
+        self.set_wind(tuning.wind);
+        Ok(())
+    }
+
     /// The preset, with any parameter changes applied.
     pub fn preset(&self) -> &Preset {
         &self.preset
@@ -179,6 +199,16 @@ impl Scene {
     pub fn frames_in(&self, seconds: f32) -> u64 {
         ((seconds / self.solver.params().dt).round() as u64).max(1)
     }
+}
+
+/// What can change while a scene runs, and is recorded whenever it does.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tuning {
+    /// Solver parameters.
+    pub solver: Params,
+    /// The wind.
+    pub wind: WindSection,
 }
 
 /// The wind at time `t`: the mean velocity, plus gusts along it and a sway of

@@ -304,7 +304,7 @@ pub struct Rough {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunnerMotion {
-    /// Start position (of the shoulders), in metres.
+    /// Start position of the body frame (on the ground, between the feet), in metres.
     pub start: Vec3,
     /// Initial heading, degrees from +X toward +Y.
     pub heading: f32,
@@ -325,7 +325,7 @@ pub struct RunnerMotion {
 impl Default for RunnerMotion {
     fn default() -> Self {
         Self {
-            start: Vec3::new(0.0, 0.0, 1.5),
+            start: Vec3::ZERO,
             heading: 0.0,
             speed: 4.0,
             stride_frequency: 1.4,
@@ -483,6 +483,8 @@ pub struct TelemetrySettings {
     pub arrow_scale: f32,
     /// What particles are coloured by.
     pub color_by: ColorBy,
+    /// Which families' correction arrows are logged (at level `full`).
+    pub corrections: FamilyToggles,
 }
 
 impl Default for TelemetrySettings {
@@ -493,6 +495,56 @@ impl Default for TelemetrySettings {
             arrow_threshold: 1e-5,
             arrow_scale: 20.0,
             color_by: ColorBy::Strain,
+            corrections: FamilyToggles::default(),
+        }
+    }
+}
+
+/// One switch per constraint family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FamilyToggles {
+    /// Stretch.
+    pub stretch: bool,
+    /// Planarity.
+    pub planarity: bool,
+    /// Normality.
+    pub normality: bool,
+    /// Curvature.
+    pub curvature: bool,
+}
+
+impl Default for FamilyToggles {
+    fn default() -> Self {
+        Self {
+            stretch: true,
+            planarity: true,
+            normality: true,
+            curvature: true,
+        }
+    }
+}
+
+impl FamilyToggles {
+    /// The switch of one family.
+    pub fn get(&self, f: crate::solver::Family) -> bool {
+        use crate::solver::Family::*;
+        match f {
+            Stretch => self.stretch,
+            Planarity => self.planarity,
+            Normality => self.normality,
+            Curvature => self.curvature,
+        }
+    }
+
+    /// The switch of one family, mutably.
+    pub fn get_mut(&mut self, f: crate::solver::Family) -> &mut bool {
+        use crate::solver::Family::*;
+        match f {
+            Stretch => &mut self.stretch,
+            Planarity => &mut self.planarity,
+            Normality => &mut self.normality,
+            Curvature => &mut self.curvature,
         }
     }
 }

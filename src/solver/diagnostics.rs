@@ -103,19 +103,57 @@ impl Diagnostics {
     }
 }
 
-/// Records one family's corrections into its diagnostics.
-pub(crate) struct FamilyRecorder<'a>(pub &'a mut FamilyDiagnostics);
+/// Records one family's corrections into its diagnostics. Forks write to
+/// the same per-particle arrays (distinct particles per colour batch, see
+/// `Particles`) and keep their own largest rotation until joined.
+pub(crate) struct FamilyRecorder {
+    dx: *mut Vec3,
+    dtheta: *mut Vec3,
+    len: usize,
+    /// Largest single rotation seen by this recorder.
+    pub max_rotation: f32,
+}
 
-impl Recorder for FamilyRecorder<'_> {
+// SAFETY: forks on other threads write distinct elements only (colouring);
+// sharing a recorder only lets other threads fork it (copy its pointers).
+unsafe impl Send for FamilyRecorder {}
+unsafe impl Sync for FamilyRecorder {}
+
+impl FamilyRecorder {
+    /// A recorder writing into `fd`'s arrays (which must outlive it).
+    pub(crate) fn new(fd: &mut FamilyDiagnostics) -> Self {
+        Self {
+            dx: fd.dx.as_mut_ptr(),
+            dtheta: fd.dtheta.as_mut_ptr(),
+            len: fd.dx.len().min(fd.dtheta.len()),
+            max_rotation: 0.0,
+        }
+    }
+}
+
+impl Recorder for FamilyRecorder {
     const ON: bool = true;
     #[inline]
     fn moved(&mut self, i: usize, dx: Vec3) {
-        self.0.dx[i] += dx;
+        assert!(i < self.len);
+        // SAFETY: in bounds; this particle is this thread's in the batch.
+        unsafe { *self.dx.add(i) += dx }
     }
     #[inline]
     fn turned(&mut self, i: usize, axis_angle: Vec3) {
-        self.0.dtheta[i] += axis_angle;
-        self.0.max_rotation = self.0.max_rotation.max(axis_angle.length());
+        assert!(i < self.len);
+        // SAFETY: in bounds; this particle is this thread's in the batch.
+        unsafe { *self.dtheta.add(i) += axis_angle }
+        self.max_rotation = self.max_rotation.max(axis_angle.length());
+    }
+    fn fork(&self) -> Self {
+        Self {
+            max_rotation: 0.0,
+            ..*self
+        }
+    }
+    fn join(&mut self, other: Self) {
+        self.max_rotation = self.max_rotation.max(other.max_rotation);
     }
 }
 

@@ -9,15 +9,17 @@
 //!    integration with damping `k`, under gravity and wind on its face;
 //!    driven particles follow their attachment exactly.
 //! 2. **adjust** ([`constraints`]): `iterations` sweeps over four families of
-//!    geometric constraints between neighbours (stretch, planarity,
-//!    normality, curvature), each weighted by its `λ`. A particle's
-//!    correction is the weighted sum of what each family asks; rotations are
-//!    shaped by Eq. 3 ([`forced_rotation`]). Colliders are projected after
-//!    each sweep, friction once at the end ([`collision`]).
+//!    geometric constraints between neighbours, each weighted by its `λ`:
+//!    planarity, normality, curvature, then stretch (the length limit has
+//!    the last word). Families are projected one after another
+//!    (Gauss–Seidel), so a particle's correction combines what each asks;
+//!    rotations are shaped by Eq. 3 ([`forced_rotation`]). Colliders are
+//!    projected after each sweep, friction once at the end ([`collision`]).
 //!
-//! Constraints are solved Gauss–Seidel, in graph-colour batches ([`topology`]):
-//! pairs in one colour share no particle, so the result is the same whatever
-//! order (or thread) projects them. The solver knows nothing of telemetry or
+//! Constraints are solved in graph-colour batches ([`topology`]): the
+//! constraints of one colour share no particle, so large batches are split
+//! across rayon's threads and the result is bit-identical for any number of
+//! threads. The solver knows nothing of telemetry or
 //! UI; [`diagnostics`] exposes what they need.
 //!
 //! ```
@@ -521,18 +523,18 @@ impl Solver {
                 if weight == 0.0 {
                     continue;
                 }
-                let mut p = Particles {
-                    x: &mut self.state.position,
-                    q: &mut self.state.orientation,
-                    inv_mass: &self.inv_mass,
-                    inv_inertia: &self.inv_inertia,
-                };
+                let p = Particles::new(
+                    &mut self.state.position,
+                    &mut self.state.orientation,
+                    &self.inv_mass,
+                    &self.inv_inertia,
+                );
                 match self.diagnostics.as_deref_mut() {
                     None => project_family(
                         family,
                         &self.topology,
                         &self.tethers,
-                        &mut p,
+                        &p,
                         weight,
                         rot,
                         &mut NoRecord,
@@ -540,15 +542,17 @@ impl Solver {
                     Some(d) => {
                         let t = Instant::now();
                         let fd = &mut d.families[family.index()];
+                        let mut rec = FamilyRecorder::new(fd);
                         project_family(
                             family,
                             &self.topology,
                             &self.tethers,
-                            &mut p,
+                            &p,
                             weight,
                             rot,
-                            &mut FamilyRecorder(fd),
+                            &mut rec,
                         );
+                        fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
                         fd.time += t.elapsed();
                     }
                 }
@@ -612,44 +616,48 @@ impl Solver {
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);
 
-/// Projects every pair of one family once, colour batch by colour batch.
+/// Projects every constraint of one family once, colour batch by colour batch.
 fn project_family<R: Recorder>(
     family: Family,
     topology: &Topology,
     tethers: &[stretch::Tether],
-    p: &mut Particles,
+    p: &Particles,
     weight: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    use constraints::{curvature, normality, planarity};
+    use constraints::{curvature, normality, planarity, project_batches};
     match family {
         Family::Stretch => {
             for set in [&topology.structural, &topology.shear] {
-                for &pair in &set.items {
-                    stretch::project(p, pair, weight, rec);
-                }
+                project_batches(&set.items, &set.batches, rec, |c, r| {
+                    stretch::project(p, c, weight, r)
+                });
             }
-            for &t in tethers {
-                stretch::project_tether(p, t, weight, rec);
-            }
+            // Each tether moves only its own particle: one batch.
+            let all = [0..tethers.len()];
+            project_batches(tethers, &all, rec, |t, r| {
+                stretch::project_tether(p, t, weight, r)
+            });
         }
         Family::Planarity => {
-            for &pair in &topology.structural.items {
-                planarity::project(p, pair, weight, rot, rec);
-            }
+            let set = &topology.structural;
+            project_batches(&set.items, &set.batches, rec, |c, r| {
+                planarity::project(p, c, weight, rot, r)
+            });
         }
         Family::Normality => {
             for set in [&topology.structural, &topology.shear] {
-                for &pair in &set.items {
-                    normality::project(p, pair, weight, rot, rec);
-                }
+                project_batches(&set.items, &set.batches, rec, |c, r| {
+                    normality::project(p, c, weight, rot, r)
+                });
             }
         }
         Family::Curvature => {
-            for &pair in &topology.bend.items {
-                curvature::project(p, pair, weight, rot, rec);
-            }
+            let set = &topology.bend;
+            project_batches(&set.items, &set.batches, rec, |c, r| {
+                curvature::project(p, c, weight, rot, r)
+            });
         }
     }
 }

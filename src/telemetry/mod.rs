@@ -35,16 +35,16 @@ use glam::Vec3;
 use rerun::{RecordingStream, RecordingStreamResult};
 
 use crate::scene::{
-    Scene,
+    Scene, Tuning,
     preset::{Level, ShapeKind, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, Params, Pose, StepError};
+use crate::solver::{Diagnostics, Family, Pose, StepError};
 
 /// Streams a scene to a Rerun recording.
 pub struct Telemetry {
     rec: RecordingStream,
     settings: TelemetrySettings,
-    last_params: Option<Params>,
+    last_tuning: Option<Tuning>,
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
 }
@@ -55,7 +55,7 @@ impl Telemetry {
         Self {
             rec,
             settings,
-            last_params: None,
+            last_tuning: None,
             last_cost: Duration::ZERO,
         }
     }
@@ -231,33 +231,39 @@ impl Telemetry {
         Ok(())
     }
 
-    /// Logs the parameters if they differ from the last logged ones, at the
-    /// current frame, with an event naming what changed.
-    pub fn log_params(
+    /// Logs the live settings (solver parameters and wind) if they differ
+    /// from the last logged ones, at `frame`, with an event naming what
+    /// changed. `frame` is the frame whose step first uses them.
+    pub fn log_tuning(
         &mut self,
         frame: u64,
         time: f64,
-        params: &Params,
+        tuning: &Tuning,
     ) -> RecordingStreamResult<()> {
-        if self.last_params.as_ref() == Some(params) {
+        if self.last_tuning.as_ref() == Some(tuning) {
             return Ok(());
         }
         self.set_time(frame, time);
-        let text = toml::to_string(params).expect("parameters serialize");
+        let text = crate::scene::load::to_toml(tuning);
         self.rec.log(
             paths::PARAMS,
             &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
         )?;
-        let message = match &self.last_params {
+        let message = match &self.last_tuning {
             None => "initial parameters".to_string(),
-            Some(old) => format!("parameters changed: {}", describe_changes(old, params)),
+            Some(old) => format!("parameters changed: {}", describe_changes(old, tuning)),
         };
         self.rec.log(
             paths::EVENTS,
             &rerun::TextLog::new(message).with_level(rerun::TextLogLevel::INFO),
         )?;
-        self.last_params = Some(*params);
+        self.last_tuning = Some(*tuning);
         Ok(())
+    }
+
+    /// Forgets what was logged, so everything is logged again (for a new sink).
+    pub fn forget(&mut self) {
+        self.last_tuning = None;
     }
 
     /// Logs a solver failure at the frame it happened.
@@ -370,11 +376,13 @@ impl Telemetry {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
+            let shown = self.settings.corrections.get(f);
             for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
+                // A family switched off logs empty arrows, clearing its old ones.
                 let (origins, arrows): (Vec<Vec3>, Vec<Vec3>) = vectors
                     .iter()
                     .zip(x)
-                    .filter(|(v, _)| v.length() >= threshold && v.length() > 0.0)
+                    .filter(|(v, _)| shown && v.length() >= threshold && v.length() > 0.0)
                     .map(|(v, o)| (*o, *v * scale))
                     .unzip();
                 self.rec.log(
@@ -398,16 +406,24 @@ fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
 
-/// "weights.curvature 0.1 → 0.3, iterations 10 → 12".
-pub fn describe_changes(old: &Params, new: &Params) -> String {
-    let a: toml::Table = toml::Table::try_from(old).expect("parameters serialize");
-    let b: toml::Table = toml::Table::try_from(new).expect("parameters serialize");
+/// "solver.weights.curvature 0.1 → 0.3, solver.iterations 10 → 12".
+pub fn describe_changes(old: &Tuning, new: &Tuning) -> String {
+    let a: toml::Table = toml::Table::try_from(old).expect("tuning serializes");
+    let b: toml::Table = toml::Table::try_from(new).expect("tuning serializes");
     let mut changes = Vec::new();
     diff("", &a, &b, &mut changes);
     if changes.is_empty() {
         "none".into()
     } else {
         changes.join(", ")
+    }
+}
+
+/// A value as a person writes it: floats in their shortest `f32` form.
+fn short(v: &toml::Value) -> String {
+    match v {
+        toml::Value::Float(f) => (*f as f32).to_string(),
+        other => other.to_string(),
     }
 }
 
@@ -419,8 +435,8 @@ fn diff(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut Vec<String>) {
                 diff(&format!("{key}."), ta, tb, out)
             }
             (Some(va), vb) if va == vb => {}
-            (Some(va), vb) => out.push(format!("{key} {va} → {vb}")),
-            (None, vb) => out.push(format!("{key} → {vb}")),
+            (Some(va), vb) => out.push(format!("{key} {} → {}", short(va), short(vb))),
+            (None, vb) => out.push(format!("{key} → {}", short(vb))),
         }
     }
 }

@@ -21,8 +21,9 @@
 //!
 //! Both vanish exactly when the run is straight (the rest state), so `λ`
 //! sets how easily the cloth bends. Twist about the run is left to
-//! normality. The violation reported is the sagitta in half-lengths of the
-//! run, `2|C| / L`, about the turning angle of the run.
+//! normality. The violation reported is the sagitta (along `n̂`) in
+//! half-lengths of the run, `2|C| / L`: `sin(φ/2)` for a run that turns by
+//! `φ`, about half the turn.
 
 use glam::Vec3;
 
@@ -32,14 +33,14 @@ use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology:
 /// Projects one bend triple.
 #[inline]
 pub(crate) fn project<R: Recorder>(
-    p: &mut Particles,
+    p: &Particles,
     t: Triple,
     weight: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
     let (a, m, b) = (t.a as usize, t.mid as usize, t.b as usize);
-    let (na, nb) = (normal_of(p.q[a]), normal_of(p.q[b]));
+    let (na, nb) = (normal_of(p.q(a)), normal_of(p.q(b)));
     let sum = na + nb;
     let len = sum.length();
     if len <= 1e-6 {
@@ -49,14 +50,14 @@ pub(crate) fn project<R: Recorder>(
 
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
-    let chord = p.x[b] - p.x[a];
+    let chord = p.x(b) - p.x(a);
     let across =
         (n - chord * (n.dot(chord) / chord.length_squared().max(1e-18))).normalize_or_zero();
     let (wa, wm, wb) = (p.inv_mass[a], p.inv_mass[m], p.inv_mass[b]);
     let w = wm + 0.25 * (wa + wb);
     if w > 0.0 && across != Vec3::ZERO {
         let n = across;
-        let c = n.dot(p.x[m] - 0.5 * (p.x[a] + p.x[b]));
+        let c = n.dot(p.x(m) - 0.5 * (p.x(a) + p.x(b)));
         let delta = -weight * c / w;
         if wm > 0.0 {
             shift(p, m, n * (wm * delta), rec);

@@ -5,12 +5,13 @@
 //!
 //! | family | violation `C` | gradient in position | gradient in rotation |
 //! |---|---|---|---|
-//! | stretch | `|s| − L` | `∓ ŝ` | — |
-//! | planarity | `n_a · s` | `∓ n_a` | `n_a × s` (the paper's `v`) |
+//! | stretch | `|s| − L` (and tethers, one-sided) | `∓ ŝ` | — |
+//! | planarity | `α = asin(n_a · ŝ)`, zero iff `n_a · s = 0` | `∓ n⊥ / |s|` | unit `n_a × ŝ` (the paper's `v`) |
 //! | normality | `∠(n_a, n_b)` | — | `n_a × n_b` |
-//! | curvature | sagitta `n̂ · (x_m − ½(x_a + x_b))`, bend angle | `n̂`, `−½ n̂` | `(n_a + n_b) × s` |
+//! | curvature | sagitta `n̂ · (x_m − ½(x_a + x_b))`; bend angle | `n̂⊥`, `−½ n̂⊥` | `(n_a + n_b) × s` |
 //!
-//! with `s = x_b − x_a` and `n̂` the normalised `n_a + n_b`. A projection changes positions and orientations as
+//! with `s = x_b − x_a`, `n⊥` the normal made perpendicular to the edge and
+//! `n̂⊥` the normalised `n_a + n_b` made perpendicular to the chord. A projection changes positions and orientations as
 //! little as possible in the metric of mass and inertia (§3.4): with inverse
 //! masses `w`, inverse inertias `β` and gradients `g`, the multiplier is
 //! `Δ = −λ C / Σ (w|g_x|² + β|g_θ|²)`, each particle moves by `w g_x Δ` and
@@ -25,23 +26,94 @@ use glam::{Quat, Vec3};
 
 use super::{cloth::rotate, forced_rotation::ForcedRotation};
 
-/// Mutable views of what a projection reads and writes.
+/// What a projection reads and writes: positions and orientations through
+/// per-index accessors, masses and inertias as slices.
+///
+/// One view is shared by every thread projecting a colour batch. That is
+/// sound because of the colouring: no two constraints of a batch touch the
+/// same free particle, so no element is written by one thread while another
+/// reads or writes it. Driven particles may be read by many constraints of a
+/// batch (tether anchors), but no projection writes a particle with zero
+/// inverse mass or inertia.
 pub(crate) struct Particles<'a> {
-    pub x: &'a mut [Vec3],
-    pub q: &'a mut [Quat],
+    x: *mut Vec3,
+    q: *mut Quat,
+    len: usize,
     pub inv_mass: &'a [f32],
     pub inv_inertia: &'a [f32],
+    _borrow: std::marker::PhantomData<&'a mut [Vec3]>,
 }
 
-/// Receives the corrections a projection applies (for diagnostics).
-pub(crate) trait Recorder {
+// SAFETY: see the type's documentation: concurrent access is to distinct
+// elements only, which the colour batches guarantee.
+unsafe impl Sync for Particles<'_> {}
+
+impl<'a> Particles<'a> {
+    /// A view of the state, borrowed for `'a`.
+    pub fn new(
+        x: &'a mut [Vec3],
+        q: &'a mut [Quat],
+        inv_mass: &'a [f32],
+        inv_inertia: &'a [f32],
+    ) -> Self {
+        assert!(x.len() == q.len() && x.len() == inv_mass.len() && x.len() == inv_inertia.len());
+        Self {
+            len: x.len(),
+            x: x.as_mut_ptr(),
+            q: q.as_mut_ptr(),
+            inv_mass,
+            inv_inertia,
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// Position of particle `i`.
+    #[inline(always)]
+    pub fn x(&self, i: usize) -> Vec3 {
+        assert!(i < self.len);
+        // SAFETY: in bounds; exclusive per batch (see the type's docs).
+        unsafe { *self.x.add(i) }
+    }
+
+    /// Orientation of particle `i`.
+    #[inline(always)]
+    pub fn q(&self, i: usize) -> Quat {
+        assert!(i < self.len);
+        // SAFETY: in bounds; exclusive per batch (see the type's docs).
+        unsafe { *self.q.add(i) }
+    }
+
+    #[inline(always)]
+    fn set_x(&self, i: usize, v: Vec3) {
+        assert!(i < self.len);
+        // SAFETY: in bounds; exclusive per batch (see the type's docs).
+        unsafe { *self.x.add(i) = v }
+    }
+
+    #[inline(always)]
+    fn set_q(&self, i: usize, v: Quat) {
+        assert!(i < self.len);
+        // SAFETY: in bounds; exclusive per batch (see the type's docs).
+        unsafe { *self.q.add(i) = v }
+    }
+}
+
+/// Receives the corrections a projection applies (for diagnostics). Each
+/// thread has its own recorder; its per-particle writes follow the same
+/// colour discipline as [`Particles`].
+pub(crate) trait Recorder: Send + Sync {
     /// Whether anything is recorded; lets the compiler drop the calls.
     const ON: bool;
     fn moved(&mut self, i: usize, dx: Vec3);
     fn turned(&mut self, i: usize, axis_angle: Vec3);
+    /// A recorder for another thread, writing to the same place.
+    fn fork(&self) -> Self;
+    /// Takes in what a forked recorder gathered (order does not matter).
+    fn join(&mut self, other: Self);
 }
 
 /// The recorder used when diagnostics are off: records nothing.
+#[derive(Clone, Copy)]
 pub(crate) struct NoRecord;
 
 impl Recorder for NoRecord {
@@ -50,13 +122,65 @@ impl Recorder for NoRecord {
     fn moved(&mut self, _: usize, _: Vec3) {}
     #[inline(always)]
     fn turned(&mut self, _: usize, _: Vec3) {}
+    fn fork(&self) -> Self {
+        NoRecord
+    }
+    fn join(&mut self, _: Self) {}
+}
+
+/// Constraints per colour batch below which one thread beats several.
+const PARALLEL_MIN: usize = 2048;
+/// Constraints per parallel task.
+const CHUNK: usize = 512;
+
+/// Projects `items` colour batch by colour batch with `project`; large
+/// batches are split across rayon's threads. Within a batch the order does
+/// not matter (no shared particles), so the result is bit-identical for any
+/// number of threads.
+pub(crate) fn project_batches<T, R>(
+    items: &[T],
+    batches: &[std::ops::Range<usize>],
+    rec: &mut R,
+    project: impl Fn(T, &mut R) + Sync,
+) where
+    T: Copy + Sync,
+    R: Recorder,
+{
+    use rayon::prelude::*;
+    for range in batches {
+        let batch = &items[range.clone()];
+        if batch.len() < PARALLEL_MIN || rayon::current_num_threads() == 1 {
+            for &c in batch {
+                project(c, rec);
+            }
+        } else {
+            let base: &R = rec;
+            let gathered = batch
+                .par_chunks(CHUNK)
+                .map(|chunk| {
+                    let mut r = base.fork();
+                    for &c in chunk {
+                        project(c, &mut r);
+                    }
+                    r
+                })
+                .reduce(
+                    || base.fork(),
+                    |mut a, b| {
+                        a.join(b);
+                        a
+                    },
+                );
+            rec.join(gathered);
+        }
+    }
 }
 
 /// Turns particle `i` by the forced rotation for the requested rotation
 /// vector `omega` (axis × full angle).
 #[inline]
 pub(crate) fn turn<R: Recorder>(
-    p: &mut Particles,
+    p: &Particles,
     i: usize,
     omega: Vec3,
     rot: &ForcedRotation,
@@ -73,7 +197,7 @@ pub(crate) fn turn<R: Recorder>(
         return;
     }
     let axis = omega / full;
-    p.q[i] = rotate(p.q[i], axis * angle);
+    p.set_q(i, rotate(p.q(i), axis * angle));
     if R::ON {
         rec.turned(i, axis * angle);
     }
@@ -81,8 +205,8 @@ pub(crate) fn turn<R: Recorder>(
 
 /// Moves particle `i` by `dx`.
 #[inline]
-pub(crate) fn shift<R: Recorder>(p: &mut Particles, i: usize, dx: Vec3, rec: &mut R) {
-    p.x[i] += dx;
+pub(crate) fn shift<R: Recorder>(p: &Particles, i: usize, dx: Vec3, rec: &mut R) {
+    p.set_x(i, p.x(i) + dx);
     if R::ON {
         rec.moved(i, dx);
     }

@@ -14,7 +14,7 @@ use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology:
 /// Projects one pair.
 #[inline]
 pub(crate) fn project<R: Recorder>(
-    p: &mut Particles,
+    p: &Particles,
     pair: Pair,
     weight: f32,
     rot: &ForcedRotation,
@@ -26,7 +26,7 @@ pub(crate) fn project<R: Recorder>(
     if total <= 0.0 {
         return;
     }
-    let (na, nb) = (normal_of(p.q[a]), normal_of(p.q[b]));
+    let (na, nb) = (normal_of(p.q(a)), normal_of(p.q(b)));
     let axis = na.cross(nb);
     let sin = axis.length();
     if sin <= 1e-9 {

@@ -17,7 +17,7 @@ use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology:
 /// Projects one edge from both ends.
 #[inline]
 pub(crate) fn project<R: Recorder>(
-    p: &mut Particles,
+    p: &Particles,
     pair: Pair,
     weight: f32,
     rot: &ForcedRotation,
@@ -37,15 +37,15 @@ pub(crate) fn project<R: Recorder>(
 /// limit.
 #[inline]
 fn one_side<R: Recorder>(
-    p: &mut Particles,
+    p: &Particles,
     e: usize,
     o: usize,
     weight: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let n = normal_of(p.q[e]);
-    let s = p.x[o] - p.x[e];
+    let n = normal_of(p.q(e));
+    let s = p.x(o) - p.x(e);
     let len = s.length();
     if len <= 1e-9 {
         return;

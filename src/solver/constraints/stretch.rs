@@ -20,14 +20,14 @@ use crate::solver::topology::Pair;
 
 /// Projects one edge.
 #[inline]
-pub(crate) fn project<R: Recorder>(p: &mut Particles, pair: Pair, weight: f32, rec: &mut R) {
+pub(crate) fn project<R: Recorder>(p: &Particles, pair: Pair, weight: f32, rec: &mut R) {
     let (a, b) = (pair.a as usize, pair.b as usize);
     let (wa, wb) = (p.inv_mass[a], p.inv_mass[b]);
     let w = wa + wb;
     if w == 0.0 {
         return;
     }
-    let s = p.x[b] - p.x[a];
+    let s = p.x(b) - p.x(a);
     let len = s.length();
     if len <= 1e-9 {
         return;
@@ -56,9 +56,9 @@ pub struct Tether {
 
 /// Projects one tether: pulls the particle back if it is too far.
 #[inline]
-pub(crate) fn project_tether<R: Recorder>(p: &mut Particles, t: Tether, weight: f32, rec: &mut R) {
+pub(crate) fn project_tether<R: Recorder>(p: &Particles, t: Tether, weight: f32, rec: &mut R) {
     let (i, a) = (t.particle as usize, t.anchor as usize);
-    let s = p.x[a] - p.x[i];
+    let s = p.x(a) - p.x(i);
     let len = s.length();
     if len <= t.rest || len <= 1e-9 {
         return;

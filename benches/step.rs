@@ -1,0 +1,200 @@
+//! Solver benchmarks (`cargo bench`): step time by size, beside a peer XPBD
+//! solver on the same grid; threads; cost per family; telemetry cost.
+//!
+//! Every "step" here is one solver step of Δt = 1/60 s with one substep and
+//! 10 adjust iterations, a vertical sheet pinned at its two top corners,
+//! measured after 30 warm-up steps so the cloth is moving.
+
+use std::f32::consts::FRAC_PI_2;
+use std::hint::black_box;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use glam::{Quat, Vec3};
+use weft::scene::{Scene, load};
+use weft::solver::{ClothSpec, Environment, Family, Params, Pose, Solver, Weights};
+use weft::telemetry::Telemetry;
+
+const DT: f32 = 1.0 / 60.0;
+const ITERATIONS: u32 = 10;
+
+fn weft_sheet(n: u32, weights: Weights) -> Solver {
+    let spec = ClothSpec {
+        weft: n,
+        warp: n,
+        rotation: Quat::from_rotation_x(FRAC_PI_2),
+        ..ClothSpec::default()
+    };
+    let params = Params {
+        iterations: ITERATIONS,
+        substeps: 1,
+        dt: DT,
+        weights,
+        ..Params::default()
+    };
+    let mut s = Solver::new(spec, params, &[Pose::IDENTITY]).unwrap();
+    s.attach(spec.index(0, n - 1), 0);
+    s.attach(spec.index(n - 1, n - 1), 0);
+    for _ in 0..30 {
+        s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap();
+    }
+    s
+}
+
+/// The peer: rapier-cloth-core's XPBD solver, same grid, pins, iterations, Δt.
+struct Peer {
+    cloth: rapier_cloth_core::Cloth,
+    solver: rapier_cloth_core::Solver,
+    settings: rapier_cloth_core::SolverSettings,
+}
+
+impl Peer {
+    fn new(n: usize) -> Self {
+        use rapier_cloth_core::{Cloth, ClothMaterial, GridBuilder, Solver, SolverSettings, Vec3};
+        let mesh = GridBuilder::new(n, n)
+            .size(1.0, 1.0)
+            .origin(Vec3::ZERO)
+            .axes(Vec3::X, Vec3::Z)
+            .build()
+            .unwrap();
+        let mut cloth = Cloth::new(mesh, ClothMaterial::default()).unwrap();
+        let top = |i: usize| ((n - 1) * n + i) as u32;
+        for i in [top(0), top(n - 1)] {
+            let p = cloth.positions()[i as usize];
+            cloth.pin(i, p).unwrap();
+        }
+        let settings = SolverSettings {
+            iterations: ITERATIONS as usize,
+            ..SolverSettings::default()
+        };
+        let mut peer = Self {
+            cloth,
+            solver: Solver::new(),
+            settings,
+        };
+        for _ in 0..30 {
+            peer.step();
+        }
+        peer
+    }
+
+    fn step(&mut self) {
+        let g = rapier_cloth_core::Vec3::new(0.0, 0.0, -9.81);
+        self.solver
+            .step(&mut self.cloth, DT, g, &self.settings)
+            .unwrap();
+    }
+}
+
+fn step_by_size(c: &mut Criterion) {
+    let mut g = c.benchmark_group("step");
+    g.sample_size(20);
+    for n in [32u32, 64, 128, 256] {
+        g.throughput(Throughput::Elements((n * n) as u64));
+        let mut s = weft_sheet(n, Weights::default());
+        g.bench_with_input(BenchmarkId::new("weft", n), &n, |b, _| {
+            b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
+        });
+        let mut peer = Peer::new(n as usize);
+        g.bench_with_input(BenchmarkId::new("rapier-cloth-core", n), &n, |b, _| {
+            b.iter(|| peer.step())
+        });
+    }
+    g.finish();
+}
+
+fn threads(c: &mut Criterion) {
+    let mut g = c.benchmark_group("threads");
+    g.sample_size(20);
+    for threads in [1usize, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut s = pool.install(|| weft_sheet(128, Weights::default()));
+        g.bench_with_input(
+            BenchmarkId::new("weft 128x128", threads),
+            &threads,
+            |b, _| {
+                b.iter(|| {
+                    pool.install(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
+                })
+            },
+        );
+    }
+    g.finish();
+}
+
+fn per_family(c: &mut Criterion) {
+    let mut g = c.benchmark_group("family 64x64");
+    g.sample_size(20);
+    for f in Family::ALL {
+        let mut weights = Weights {
+            stretch: 0.0,
+            planarity: 0.0,
+            normality: 0.0,
+            curvature: 0.0,
+        };
+        *weights.get_mut(f) = 1.0;
+        let mut s = weft_sheet(64, weights);
+        g.bench_function(f.name(), |b| {
+            b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
+        });
+    }
+    g.finish();
+}
+
+fn telemetry(c: &mut Criterion) {
+    let mut g = c.benchmark_group("telemetry 64x64");
+    g.sample_size(20);
+    let dir = tempfile::tempdir().unwrap();
+    let sets = |level: &str| -> Vec<weft::scene::Override> {
+        [
+            "cloth.weft=64",
+            "cloth.warp=64",
+            "solver.substeps=1",
+            "solver.iterations=10",
+            &format!("telemetry.level=\"{level}\""),
+        ]
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect()
+    };
+    for level in ["off", "summary", "full"] {
+        for sink in ["file", "memory"] {
+            let loaded = load::load("hanging_sheet", &sets(level)).unwrap();
+            let mut scene = Scene::new(&loaded.preset).unwrap();
+            let (rec, _storage) = match sink {
+                "file" => (
+                    rerun::RecordingStreamBuilder::new("weft-bench")
+                        .save(dir.path().join(format!("{level}.rrd")))
+                        .unwrap(),
+                    None,
+                ),
+                _ => {
+                    let (rec, storage) = rerun::RecordingStreamBuilder::new("weft-bench")
+                        .memory()
+                        .unwrap();
+                    (rec, Some(storage))
+                }
+            };
+            let mut t = Telemetry::new(rec, loaded.preset.telemetry);
+            scene.solver_mut().set_diagnostics(t.needs_diagnostics());
+            t.log_static(&scene, &loaded.resolved).unwrap();
+            g.bench_function(BenchmarkId::new(level, sink), |b| {
+                b.iter(|| {
+                    scene.step().unwrap();
+                    t.log_frame(black_box(&scene)).unwrap();
+                })
+            });
+            if let Some(storage) = _storage {
+                // Keep memory bounded between benchmarks.
+                drop(storage.take());
+            }
+        }
+    }
+    g.finish();
+    let _ = Vec3::ZERO;
+}
+
+criterion_group!(benches, step_by_size, threads, per_family, telemetry);
+criterion_main!(benches);
