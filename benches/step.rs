@@ -9,7 +9,7 @@ use std::f32::consts::FRAC_PI_2;
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use glam::{Quat, Vec3};
+use glam::Quat;
 use weft::scene::{Scene, load};
 use weft::solver::{ClothSpec, Environment, Family, Params, Pose, Solver, Weights};
 use weft::telemetry::Telemetry;
@@ -193,8 +193,13 @@ fn telemetry(c: &mut Criterion) {
         }
     }
     g.finish();
-    let _ = Vec3::ZERO;
 }
 
-criterion_group!(benches, step_by_size, threads, per_family, telemetry);
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .warm_up_time(std::time::Duration::from_secs(1))
+        .measurement_time(std::time::Duration::from_secs(3));
+    targets = step_by_size, threads, per_family, telemetry
+}
 criterion_main!(benches);

@@ -237,14 +237,20 @@ impl Run {
         f
     }
 
-    /// Logs the end-of-run summary, flushes, and returns the figures.
-    pub fn finish(self) -> Result<Figures, RunError> {
+    /// Logs the summary of the run so far (what `weft replay` checks against).
+    pub fn log_summary(&self) -> Result<Figures, RunError> {
         let figures = self.figures();
         let text = toml::to_string(&figures).expect("figures serialize");
         self.telemetry.stream().log_static(
             paths::SUMMARY,
             &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
         )?;
+        Ok(figures)
+    }
+
+    /// Logs the end-of-run summary, flushes, and returns the figures.
+    pub fn finish(self) -> Result<Figures, RunError> {
+        let figures = self.log_summary()?;
         self.telemetry.flush().ok();
         Ok(figures)
     }

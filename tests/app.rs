@@ -116,7 +116,13 @@ fn a_slider_changes_the_solver_and_the_recording() {
         .params
         .iter()
         .find(|(_, t)| t.contains("curvature = 0.35"))
-        .expect("change recorded");
+        .unwrap_or_else(|| {
+            panic!(
+                "change not recorded: {:?} {:?}",
+                rec.params,
+                rec.entities.keys().collect::<Vec<_>>()
+            )
+        });
     assert_eq!(change.0, 3);
     assert!(
         rec.events
@@ -131,7 +137,15 @@ fn a_slider_changes_the_solver_and_the_recording() {
         .iter()
         .copied()
         .collect();
-    assert_eq!(frames, vec![1, 2, 3]);
+    assert_eq!(
+        frames,
+        vec![0, 1, 2, 3],
+        "a recording starts the scene over"
+    );
+    // The session replays bit for bit, tuning change included.
+    let replayed = weft::replay::replay(&file).unwrap();
+    assert_eq!((replayed.frames, replayed.changes), (3, 1));
+    assert!(replayed.reproduced(), "{replayed:?}");
 }
 
 #[test]

@@ -96,9 +96,9 @@ impl Tee {
         }
     }
 
-    fn start(&self, path: &PathBuf) -> Result<(), String> {
-        let file = FileSink::new(path.clone())
-            .map_err(|e| format!("cannot record to {}: {e}", path.display()))?;
+    fn start(&self, path: &std::path::Path) -> Result<(), String> {
+        let file =
+            FileSink::new(path).map_err(|e| format!("cannot record to {}: {e}", path.display()))?;
         if let Some(info) = self.store_info.lock().expect("not poisoned").clone() {
             file.send(info);
         }
@@ -163,7 +163,21 @@ impl Session {
         let shared = status.clone();
         let thread = std::thread::Builder::new()
             .name("weft-sim".into())
-            .spawn(move || Worker::new(run, loaded, name, rec, tee, shared).serve(rx))
+            .spawn(move || {
+                let worker = Worker {
+                    run,
+                    loaded,
+                    name,
+                    rec,
+                    tee,
+                    status: shared,
+                    playing: false,
+                    speed: 1.0,
+                    next_step: Instant::now(),
+                    recent: Default::default(),
+                };
+                worker.serve(rx)
+            })
             .map_err(|e| e.to_string())?;
         Ok(Self {
             tx,
@@ -231,28 +245,6 @@ struct Worker {
 }
 
 impl Worker {
-    fn new(
-        run: Run,
-        loaded: Loaded,
-        name: String,
-        rec: rerun::RecordingStream,
-        tee: Arc<Tee>,
-        status: Arc<Mutex<Status>>,
-    ) -> Self {
-        Self {
-            run,
-            loaded,
-            name,
-            rec,
-            tee,
-            status,
-            playing: false,
-            speed: 1.0,
-            next_step: Instant::now(),
-            recent: Default::default(),
-        }
-    }
-
     fn serve(mut self, rx: Receiver<Command>) {
         loop {
             // Paused, wait for a command; playing, take what has arrived.
@@ -290,7 +282,7 @@ impl Worker {
                 }
             }
         }
-        self.tee.stop();
+        self.stop_recording();
         let _ = self.rec.flush_blocking();
     }
 
@@ -306,6 +298,7 @@ impl Worker {
                 self.step();
             }
             Command::Reset => {
+                self.stop_recording();
                 let tuning = self.run.scene.tuning();
                 let telemetry = *self.run.telemetry.settings();
                 let mut loaded = self.loaded.clone();
@@ -318,8 +311,17 @@ impl Worker {
                     self.set_error(Some(e.to_string()));
                 }
             }
-            Command::Telemetry(t) => self.run.telemetry.set_settings(t),
+            Command::Telemetry(t) => {
+                let (frame, time) = (self.run.scene.frame(), self.run.scene.time());
+                let text = format!(
+                    "telemetry settings: {}",
+                    crate::scene::load::to_toml(&t).replace('\n', " ")
+                );
+                let _ = self.run.telemetry.log_event(frame, time, &text);
+                self.run.telemetry.set_settings(t);
+            }
             Command::Load(loaded, name) => {
+                self.stop_recording();
                 self.name = name;
                 let tuning = Tuning {
                     solver: loaded.preset.solver,
@@ -328,33 +330,48 @@ impl Worker {
                 self.loaded = *loaded.clone();
                 self.restart(*loaded, tuning);
             }
-            Command::StartRecording(path) => match {
+            Command::StartRecording(path) => {
+                self.stop_recording();
+                // A recording starts the scene over with the current tuning
+                // (stored in its preset), so `weft replay` reproduces it.
+                let tuning = self.run.scene.tuning();
+                let mut loaded = self.loaded.clone();
+                loaded.preset.solver = tuning.solver;
+                loaded.preset.environment.wind = tuning.wind;
+                loaded.preset.telemetry = *self.run.telemetry.settings();
+                loaded.resolved = crate::scene::load::to_toml(&loaded.preset);
                 // What is already logged goes to the viewer only.
                 let _ = self.rec.flush_blocking();
-                self.tee.start(&path)
-            } {
-                Ok(()) => {
-                    // The file starts with everything static, then the tuning.
-                    let _ = self
-                        .run
-                        .telemetry
-                        .log_static(&self.run.scene, &self.loaded.resolved);
-                    self.run.telemetry.forget();
-                    let tuning = self.run.scene.tuning();
-                    let (frame, time) = (self.run.scene.frame(), self.run.scene.time());
-                    let _ = self.run.telemetry.log_tuning(frame, time, &tuning);
-                    self.status.lock().expect("not poisoned").recording = Some(path);
-                    self.set_error(None);
+                match self.tee.start(&path) {
+                    Ok(()) => {
+                        self.loaded = loaded.clone();
+                        self.restart(loaded, tuning);
+                        self.status.lock().expect("not poisoned").recording = Some(path);
+                    }
+                    Err(e) => self.set_error(Some(e)),
                 }
-                Err(e) => self.set_error(Some(e)),
-            },
-            Command::StopRecording => {
-                let _ = self.rec.flush_blocking();
-                self.tee.stop();
-                self.status.lock().expect("not poisoned").recording = None;
             }
+            Command::StopRecording => self.stop_recording(),
         }
         self.publish();
+    }
+
+    /// Ends a recording, if one is running: the summary, then the file closes.
+    fn stop_recording(&mut self) {
+        if self
+            .status
+            .lock()
+            .expect("not poisoned")
+            .recording
+            .is_none()
+        {
+            return;
+        }
+        let _ = self.run.log_summary();
+        let _ = self.rec.flush_blocking();
+        self.tee.stop();
+        // Only now is the file complete.
+        self.status.lock().expect("not poisoned").recording = None;
     }
 
     fn restart(&mut self, mut loaded: Loaded, tuning: Tuning) {

@@ -635,8 +635,8 @@ fn project_family<R: Recorder>(
                 });
             }
             // Each tether moves only its own particle: one batch.
-            let all = [0..tethers.len()];
-            project_batches(tethers, &all, rec, |t, r| {
+            let whole = 0..tethers.len();
+            project_batches(tethers, std::slice::from_ref(&whole), rec, |t, r| {
                 stretch::project_tether(p, t, weight, r)
             });
         }

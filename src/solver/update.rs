@@ -113,7 +113,7 @@ pub(crate) fn integrate(
 fn rotation_vector(q: glam::Quat) -> Vec3 {
     let v = Vec3::new(q.x, q.y, q.z);
     let s = v.length();
-    if !(s > 1e-9) {
+    if s.is_nan() || s <= 1e-9 {
         return v * 2.0;
     }
     v * (2.0 * s.atan2(q.w) / s)

@@ -266,6 +266,15 @@ impl Telemetry {
         self.last_tuning = None;
     }
 
+    /// Logs an informational event at `frame`.
+    pub fn log_event(&self, frame: u64, time: f64, text: &str) -> RecordingStreamResult<()> {
+        self.set_time(frame, time);
+        self.rec.log(
+            paths::EVENTS,
+            &rerun::TextLog::new(text).with_level(rerun::TextLogLevel::INFO),
+        )
+    }
+
     /// Logs a solver failure at the frame it happened.
     pub fn log_failure(
         &self,

@@ -189,11 +189,11 @@ pub(crate) fn turn<R: Recorder>(
     let full = omega.length();
     // Written so that NaN also returns: a non-finite state is reported by
     // the step, never turned into a panic here.
-    if !(full > 1e-12) {
+    if full.is_nan() || full <= 1e-12 {
         return;
     }
     let angle = rot.angle(full);
-    if !(angle > 0.0) {
+    if angle.is_nan() || angle <= 0.0 {
         return;
     }
     let axis = omega / full;
