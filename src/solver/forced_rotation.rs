@@ -42,6 +42,12 @@ impl ForcedRotation {
             return 0.0;
         }
         let ratio = self.h / full;
+        // exp(−r) ≥ 1 − r: when even that lower bound of the envelope is
+        // above the full correction, the min is the full correction (exact,
+        // and by far the common case).
+        if full <= self.phi * (1.0 - ratio) {
+            return full;
+        }
         let envelope = if ratio <= 0.0 {
             self.phi
         } else if ratio >= 80.0 {

@@ -79,7 +79,7 @@ pub(crate) fn project<R: Recorder>(
         return;
     }
     let e = e / e_len;
-    let bend = na.cross(nb).dot(e).atan2(na.dot(nb));
+    let bend = super::atan2(na.cross(nb).dot(e), na.dot(nb));
     let full = weight * bend / total;
     if ba > 0.0 {
         turn(p, a, e * (full * ba), rot, rec);

@@ -129,9 +129,9 @@ impl Recorder for NoRecord {
 }
 
 /// Constraints per colour batch below which one thread beats several.
-const PARALLEL_MIN: usize = 2048;
+const PARALLEL_MIN: usize = 4096;
 /// Constraints per parallel task.
-const CHUNK: usize = 512;
+const CHUNK: usize = 1024;
 
 /// Projects `items` colour batch by colour batch with `project`; large
 /// batches are split across rayon's threads. Within a batch the order does
@@ -196,10 +196,10 @@ pub(crate) fn turn<R: Recorder>(
     if angle.is_nan() || angle <= 0.0 {
         return;
     }
-    let axis = omega / full;
-    p.set_q(i, rotate(p.q(i), axis * angle));
+    let turn = omega * (angle / full);
+    p.set_q(i, rotate(p.q(i), turn));
     if R::ON {
-        rec.turned(i, axis * angle);
+        rec.turned(i, turn);
     }
 }
 
@@ -209,5 +209,30 @@ pub(crate) fn shift<R: Recorder>(p: &Particles, i: usize, dx: Vec3, rec: &mut R)
     p.set_x(i, p.x(i) + dx);
     if R::ON {
         rec.moved(i, dx);
+    }
+}
+
+/// `atan2(y, x)`, with the series `t − t³/3 + t⁵/5 − t⁷/7` (`t = y/x`) for
+/// the small angles that dominate (error below 1e-10 there).
+#[inline]
+pub(crate) fn atan2(y: f32, x: f32) -> f32 {
+    if x > 0.0 && y.abs() < 0.05 * x {
+        let t = y / x;
+        let t2 = t * t;
+        t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 / 7.0)))
+    } else {
+        y.atan2(x)
+    }
+}
+
+/// `asin(x)`, with the series `x + x³/6 + 3x⁵/40 + 5x⁷/112` for small `x`
+/// (error below 1e-10 there).
+#[inline]
+pub(crate) fn asin(x: f32) -> f32 {
+    if x.abs() < 0.05 {
+        let x2 = x * x;
+        x * (1.0 + x2 * (1.0 / 6.0 + x2 * (3.0 / 40.0 + x2 * 5.0 / 112.0)))
+    } else {
+        x.asin()
     }
 }

@@ -32,7 +32,7 @@ pub(crate) fn project<R: Recorder>(
     if sin <= 1e-9 {
         return;
     }
-    let angle = sin.atan2(na.dot(nb));
+    let angle = super::atan2(sin, na.dot(nb));
     let axis = axis / sin;
     let full = weight * angle / total;
     if ba > 0.0 {

@@ -58,7 +58,7 @@ fn one_side<R: Recorder>(
         return; // normal along the edge: an unstable balance the others break
     }
     let (axis, across) = (axis / cos, (n - dir * sin) / cos);
-    let alpha = sin.asin();
+    let alpha = super::asin(sin);
     let (we, wo, be) = (p.inv_mass[e], p.inv_mass[o], p.inv_inertia[e]);
     let w = (we + wo) / (len * len) + be;
     if w <= 0.0 {
