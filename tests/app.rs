@@ -132,11 +132,7 @@ fn a_slider_changes_the_solver_and_the_recording() {
         rec.events
     );
     assert!(rec.preset.is_some(), "the file starts with the static data");
-    let frames: Vec<i64> = rec.entities[paths::PARTICLES]
-        .frames
-        .iter()
-        .copied()
-        .collect();
+    let frames: Vec<i64> = rec.frames(paths::PARTICLES);
     assert_eq!(
         frames,
         vec![0, 1, 2, 3],

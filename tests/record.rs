@@ -183,20 +183,9 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
         |_| {},
     );
     let rec = read::read(&thin).unwrap();
-    let frames: Vec<i64> = rec.entities[paths::PARTICLES]
-        .frames
-        .iter()
-        .copied()
-        .collect();
+    let frames: Vec<i64> = rec.frames(paths::PARTICLES);
     assert_eq!(frames, vec![0, 3, 6, 9]);
-    assert_eq!(
-        rec.entities[paths::STRAIN]
-            .frames
-            .iter()
-            .copied()
-            .collect::<Vec<_>>(),
-        vec![3, 6, 9]
-    );
+    assert_eq!(rec.frames(paths::STRAIN), vec![3, 6, 9]);
     // Summary level has no normals, mesh positions or corrections.
     assert!(!rec.entities.contains_key(paths::NORMALS));
     assert!(
@@ -295,11 +284,7 @@ fn ctrl_c_closes_the_file_with_every_frame_logged() {
     assert_eq!(summary["interrupted"].as_bool(), Some(true));
     let stepped = summary["frames"].as_integer().unwrap();
     assert!(stepped > 0);
-    let frames: Vec<i64> = rec.entities[paths::PARTICLES]
-        .frames
-        .iter()
-        .copied()
-        .collect();
+    let frames: Vec<i64> = rec.frames(paths::PARTICLES);
     assert_eq!(
         frames,
         (0..=stepped).collect::<Vec<_>>(),
@@ -339,11 +324,7 @@ fn solver_failure_is_logged_at_its_frame_and_the_file_closed() {
         .expect("failure event");
     assert_eq!(failure.0, 4);
     assert!(failure.1.contains("particle 40"), "{}", failure.1);
-    let frames: Vec<i64> = rec.entities[paths::PARTICLES]
-        .frames
-        .iter()
-        .copied()
-        .collect();
+    let frames: Vec<i64> = rec.frames(paths::PARTICLES);
     assert_eq!(frames, vec![0, 1, 2, 3]);
 }
 

@@ -43,6 +43,16 @@ pub struct Recording {
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
 }
 
+impl Recording {
+    /// The frames at which `path` was logged, in order (empty if never).
+    pub fn frames(&self, path: &str) -> Vec<i64> {
+        self.entities
+            .get(path)
+            .map(|e| e.frames.iter().copied().collect())
+            .unwrap_or_default()
+    }
+}
+
 /// The main array of a chunk's rows: the first component whose name is one
 /// of these, else the first component.
 const MAIN: [&str; 5] = [
