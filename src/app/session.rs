@@ -404,20 +404,29 @@ impl Worker {
         let mut s = self.status.lock().expect("not poisoned");
         s.step_ms = start.elapsed().as_secs_f32() * 1e3;
         drop(s);
-        self.publish();
+        self.publish_progress();
     }
 
     fn set_error(&self, e: Option<String>) {
         self.status.lock().expect("not poisoned").error = e;
     }
 
+    /// Publishes everything, the preset included (after a command).
     fn publish(&self) {
+        let mut preset = self.run.scene.preset().clone();
+        preset.telemetry = *self.run.telemetry.settings();
+        {
+            let mut s = self.status.lock().expect("not poisoned");
+            s.preset_name = self.name.clone();
+            s.preset = Some(preset);
+        }
+        self.publish_progress();
+    }
+
+    /// Publishes what a step changes (the preset does not change on a step).
+    fn publish_progress(&self) {
         let scene = &self.run.scene;
         let mut s = self.status.lock().expect("not poisoned");
-        s.preset_name = self.name.clone();
-        let mut preset = scene.preset().clone();
-        preset.telemetry = *self.run.telemetry.settings();
-        s.preset = Some(preset);
         s.frame = scene.frame();
         s.time = scene.time();
         s.playing = self.playing;
