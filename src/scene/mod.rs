@@ -81,6 +81,10 @@ impl Scene {
                     radius: c.radius.unwrap_or(0.1),
                     half_length: c.half_length.unwrap_or(0.5),
                 },
+                ShapeKind::Cylinder => Shape::Cylinder {
+                    radius: c.radius.unwrap_or(0.5),
+                    half_length: c.half_length.unwrap_or(0.5),
+                },
                 ShapeKind::Box => Shape::Box {
                     half_extents: c.half_extents.unwrap_or(Vec3::splat(0.5)),
                 },

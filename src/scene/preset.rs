@@ -77,6 +77,9 @@ pub struct ClothSection {
     pub density: f32,
     /// Thickness, in metres.
     pub thickness: f32,
+    /// Largest seeded deviation of the rest layout from flat, in metres
+    /// (see [`ClothSpec::imperfection`]).
+    pub imperfection: f32,
     /// World position of particle (0, 0) at rest, in metres.
     pub position: Vec3,
     /// Rest orientation, XYZ Euler degrees; the weft runs along local X, the
@@ -94,6 +97,7 @@ impl Default for ClothSection {
             warp: d.warp,
             density: d.density,
             thickness: d.thickness,
+            imperfection: d.imperfection,
             position: Vec3::ZERO,
             rotation: [0.0; 3],
         }
@@ -110,6 +114,7 @@ impl ClothSection {
             warp: self.warp,
             density: self.density,
             thickness: self.thickness,
+            imperfection: self.imperfection,
             origin: self.position,
             rotation: euler(self.rotation),
         }
@@ -404,6 +409,8 @@ pub enum ShapeKind {
     Sphere,
     /// Needs `radius` and `half_length` (along local Z).
     Capsule,
+    /// A flat-ended cylinder; needs `radius` and `half_length` (along local Z).
+    Cylinder,
     /// Needs `half_extents`.
     Box,
 }
@@ -1055,7 +1062,7 @@ impl Preset {
             match col.shape {
                 ShapeKind::Plane => {}
                 ShapeKind::Sphere => need("radius", col.radius.is_some())?,
-                ShapeKind::Capsule => {
+                ShapeKind::Capsule | ShapeKind::Cylinder => {
                     need("radius", col.radius.is_some())?;
                     need("half_length", col.half_length.is_some())?;
                 }

@@ -21,6 +21,9 @@ pub const MIN_RESOLUTION: u32 = 2;
 /// Largest grid side, in particles.
 pub const MAX_RESOLUTION: u32 = 512;
 
+/// The default [`ClothSpec::imperfection`]: a tenth of a millimetre.
+pub const DEFAULT_IMPERFECTION: f32 = 1e-4;
+
 /// What a cloth is made of and how it is laid out at rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClothSpec {
@@ -36,6 +39,12 @@ pub struct ClothSpec {
     pub density: f32,
     /// Thickness of the cloth, in metres; colliders keep particles half of it away.
     pub thickness: f32,
+    /// How far, at most, each particle of the rest layout sits off the flat
+    /// plane along the normal, in metres: a fixed, seeded pattern (the same
+    /// for every run) standing for the unevenness of real cloth. A perfectly
+    /// flat grid under forces in its own plane never buckles, however soft;
+    /// real cloth does. 0 gives an exactly flat cloth.
+    pub imperfection: f32,
     /// Position of particle `(0, 0)` at rest, in metres.
     pub origin: Vec3,
     /// Orientation of the rest layout: the grid spans local X (weft) and local
@@ -52,6 +61,7 @@ impl Default for ClothSpec {
             warp: 32,
             density: 0.2,
             thickness: 0.004,
+            imperfection: DEFAULT_IMPERFECTION,
             origin: Vec3::ZERO,
             rotation: Quat::IDENTITY,
         }
@@ -103,6 +113,14 @@ impl ClothSpec {
             false,
             "0 ≤ thickness ≤ 0.1 m",
         )?;
+        check_range(
+            "cloth.imperfection",
+            self.imperfection,
+            0.0,
+            0.01,
+            false,
+            "0 ≤ imperfection ≤ 0.01 m",
+        )?;
         for (name, v) in [
             ("cloth.origin", self.origin.to_array()),
             (
@@ -118,6 +136,15 @@ impl ClothSpec {
                     range: "finite components with magnitude ≤ 1e6",
                 });
             }
+        }
+        let norm = self.rotation.length();
+        if !norm.is_finite() || (norm - 1.0).abs() > 1e-3 {
+            return Err(ParamError {
+                name: "cloth.rotation",
+                value: format!("{:?} (length {norm})", self.rotation.to_array()),
+                problem: "is not a unit quaternion",
+                range: "a rotation: a quaternion of length 1 (within 1e-3)",
+            });
         }
         Ok(())
     }
@@ -157,10 +184,17 @@ impl ClothSpec {
         self.particle_mass() * r2 / 4.0
     }
 
-    /// Rest position of particle `(i, j)`.
+    /// Rest position of particle `(i, j)` on the flat layout.
     pub fn rest_position(&self, i: u32, j: u32) -> Vec3 {
         let (dx, dy) = self.spacing();
         self.origin + self.rotation * Vec3::new(i as f32 * dx, j as f32 * dy, 0.0)
+    }
+
+    /// Where particle `(i, j)` starts: its rest position, moved off the flat
+    /// plane by the seeded [`imperfection`](Self::imperfection).
+    pub fn start_position(&self, i: u32, j: u32) -> Vec3 {
+        let off = self.imperfection * unit_noise(self.index(i, j) as u64);
+        self.rest_position(i, j) + self.rotation * Vec3::new(0.0, 0.0, off)
     }
 }
 
@@ -183,7 +217,7 @@ impl ClothState {
         let mut position = Vec::with_capacity(spec.len());
         for j in 0..spec.warp {
             for i in 0..spec.weft {
-                position.push(spec.rest_position(i, j));
+                position.push(spec.start_position(i, j));
             }
         }
         let orientation = vec![spec.rotation.normalize(); spec.len()];
@@ -237,6 +271,15 @@ impl ClothState {
         self.orientation.clone_from(&other.orientation);
         self.prev_orientation.clone_from(&other.prev_orientation);
     }
+}
+
+/// A fixed pseudo-random number in `[−1, 1)` for `key` (SplitMix64).
+fn unit_noise(key: u64) -> f32 {
+    let mut z = key.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^= z >> 31;
+    (z >> 40) as f32 / (1u64 << 23) as f32 - 1.0
 }
 
 /// The local +Z axis of a unit quaternion, without a full rotation.

@@ -85,6 +85,14 @@ pub enum Shape {
         /// Half the length of the axis segment, in metres.
         half_length: f32,
     },
+    /// A flat-ended cylinder around the local Z axis from `−half_length` to
+    /// `+half_length` (a table, or the disc of a drape tester).
+    Cylinder {
+        /// Radius, in metres.
+        radius: f32,
+        /// Half the height, in metres.
+        half_length: f32,
+    },
     /// A box centred on the origin.
     Box {
         /// Half sizes along local X, Y, Z, in metres.
@@ -104,6 +112,28 @@ impl Shape {
             } => {
                 let axis = Vec3::new(0.0, 0.0, p.z.clamp(-half_length, half_length));
                 sphere(p - axis, radius)
+            }
+            Shape::Cylinder {
+                radius,
+                half_length,
+            } => {
+                let r = Vec3::new(p.x, p.y, 0.0).length();
+                let radial = if r > 1e-9 {
+                    Vec3::new(p.x / r, p.y / r, 0.0)
+                } else {
+                    Vec3::X
+                };
+                let axial = Vec3::new(0.0, 0.0, if p.z >= 0.0 { 1.0 } else { -1.0 });
+                let (dr, dz) = (r - radius, p.z.abs() - half_length);
+                if dr > 0.0 && dz > 0.0 {
+                    // Beyond the rim: the nearest point is on the edge circle.
+                    let d = (dr * dr + dz * dz).sqrt();
+                    (d, (radial * dr + axial * dz) / d)
+                } else if dr > dz {
+                    (dr, radial)
+                } else {
+                    (dz, axial)
+                }
             }
             Shape::Box { half_extents } => {
                 let q = p.abs() - half_extents;

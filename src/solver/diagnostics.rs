@@ -182,16 +182,12 @@ pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Vio
     let x = &state.position;
     let normal = |i| state.normal(i);
     match family {
-        Family::Stretch => stats(&[&topology.structural, &topology.shear], |p| {
-            stretch::violation(x, p)
-        }),
+        Family::Stretch => stats(&[&topology.structural], |p| stretch::violation(x, p)),
         Family::Planarity => stats(&[&topology.structural], |p| {
             planarity::violation(x, normal, p)
         }),
-        Family::Normality => stats(&[&topology.structural, &topology.shear], |p| {
-            normality::violation(normal, p)
-        }),
-        Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, normal, p)),
+        Family::Normality => stats(&[&topology.structural], |p| normality::violation(normal, p)),
+        Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
     }
 }
 

@@ -9,21 +9,30 @@
 //! ```
 //!
 //! The envelope `Φ · exp(−h / ζ)` is the paper's; weft reads its garbled
-//! argument as the dimensionless violation `ζ = θ*` (radians), and never turns
+//! argument as the dimensionless violation `ζ` (radians), and never turns
 //! past the full correction. So:
 //! - `h = 0` gives the Φ-capped full correction `min(θ*, Φ)`;
 //! - a larger `h` suppresses small corrections (the envelope goes to 0 as
 //!   `θ* → 0`) while large ones still approach `Φ`;
 //! - no forced rotation ever exceeds `Φ`.
 //!
-//! The default width comes from mass, inertia and the substep (the paper's
-//! `h = 2m / (I Δt²)`), made dimensionless with standard gravity `g₀` and the
-//! rest spacing `L`: `h_auto = g₀ / (h_paper · L³) = (I / (m L²)) · (g₀ Δt² / 2L)`,
-//! the tilt that gravity alone gives an edge in one substep, scaled by the
-//! element's inertia ratio. See `docs/method.md` for the reasoning.
+//! weft evaluates the envelope at the constraint's violation `ζ` (an angle)
+//! and caps the turn one projection asks for, `θ*`:
+//! `θ = min(θ*, Φ · exp(−h / ζ))` ([`ForcedRotation::limit`]); for a rigid
+//! constraint projected at once `θ* = ζ`, which is the formula above.
+//!
+//! When Eq. 3 cuts a turn to a fraction `θ / θ*` of what the constraint
+//! asked, the constraint's whole correction (its translations too) is cut by
+//! the same fraction ([`ForcedRotation::scale`]), so a constraint never moves
+//! positions for a turn it did not make.
+//!
+//! `h` is an angle, so its default ([`DEFAULT_WIDTH`]) is one number that
+//! does not depend on the grid's resolution, the substeps or the material:
+//! violations below about `h / 9` (1e-5 rad at the default `Φ = π/4`) are
+//! left alone, far below anything visible. See `docs/method.md`.
 
-/// Standard gravity, used only to make the default width dimensionless.
-pub const STANDARD_GRAVITY: f32 = 9.806_65;
+/// The default envelope width `h`, in radians.
+pub const DEFAULT_WIDTH: f32 = 1e-4;
 
 /// Eq. 3 with its two parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,13 +44,28 @@ pub struct ForcedRotation {
 }
 
 impl ForcedRotation {
-    /// The angle actually applied for a full corrective angle `full ≥ 0`.
+    /// Eq. 3 for a constraint whose violation is the angle `violation` and
+    /// which asks for a turn of `full`: the angle applied,
+    /// `min(full, Φ · exp(−h / violation))`.
+    ///
+    /// The envelope's argument is the violation, as in the paper, not the
+    /// size of one sweep's correction: a soft constraint corrects a little
+    /// per sweep, more sweeps correct less each time, and neither may change
+    /// which violations Eq. 3 lets through.
     #[inline]
-    pub fn angle(&self, full: f32) -> f32 {
-        if full <= 0.0 {
+    pub fn limit(&self, violation: f32, full: f32) -> f32 {
+        if !(full > 0.0) {
             return 0.0;
         }
-        let ratio = self.h / full;
+        if !(violation > 0.0) {
+            // No violation: the envelope is closed (h > 0) or Φ (h = 0).
+            return if self.h > 0.0 {
+                0.0
+            } else {
+                full.min(self.phi)
+            };
+        }
+        let ratio = self.h / violation;
         // exp(−r) ≥ 1 − r: when even that lower bound of the envelope is
         // above the full correction, the min is the full correction (exact,
         // and by far the common case).
@@ -59,10 +83,24 @@ impl ForcedRotation {
         full.min(envelope)
     }
 
-    /// The default width `h` for a particle of `mass` and in-plane `inertia`,
-    /// a substep `dt` and a rest spacing `spacing`.
-    pub fn auto_width(mass: f32, inertia: f32, dt: f32, spacing: f32) -> f32 {
-        let h_paper = 2.0 * mass / (inertia * dt * dt);
-        STANDARD_GRAVITY / (h_paper * spacing * spacing * spacing)
+    /// Eq. 3 where the turn asked for is the whole violation (a rigid
+    /// constraint projected at once): `min(θ*, Φ · exp(−h / θ*))`.
+    #[inline]
+    pub fn angle(&self, full: f32) -> f32 {
+        self.limit(full, full)
+    }
+
+    /// The fraction of a requested turn `full` that Eq. 3 lets through for
+    /// a constraint violated by `violation`, in `[0, 1]`; 1 when nothing is
+    /// asked.
+    #[inline]
+    pub fn scale(&self, violation: f32, full: f32) -> f32 {
+        // Written so that NaN gives 1: a non-finite state is reported by the
+        // step, never turned into a panic or silently zeroed here.
+        if !(full > 0.0) {
+            return 1.0;
+        }
+        let angle = self.limit(violation, full);
+        if angle >= full { 1.0 } else { angle / full }
     }
 }

@@ -10,11 +10,13 @@
 //!    driven particles follow their attachment exactly.
 //! 2. **adjust** ([`constraints`]): `iterations` sweeps over four families of
 //!    geometric constraints between neighbours, each weighted by its `λ`:
-//!    planarity, normality, curvature, then stretch (the length limit has
-//!    the last word). Families are projected one after another
-//!    (Gauss–Seidel), so a particle's correction combines what each asks;
-//!    rotations are shaped by Eq. 3 ([`forced_rotation`]). Colliders are
-//!    projected after each sweep, friction once at the end ([`collision`]).
+//!    planarity, normality (with shear), curvature, then stretch (the length
+//!    limit has the last word). Families are projected one after another
+//!    (Gauss–Seidel), so a particle's correction combines what each asks.
+//!    Each weight is a compliance (XPBD), so its effect does not depend on
+//!    iterations, substeps or resolution ([`params::Weights`]); rotations
+//!    are shaped by Eq. 3 ([`forced_rotation`]). Colliders are projected
+//!    after each sweep, friction once at the end ([`collision`]).
 //!
 //! Constraints are solved in graph-colour batches ([`topology`]): the
 //! constraints of one colour share no particle, so large batches are split
@@ -50,7 +52,7 @@ pub use cloth::{ClothSpec, ClothState};
 pub use collision::{Collider, Pose, Shape};
 pub use diagnostics::{Diagnostics, Violation};
 pub use forced_rotation::ForcedRotation;
-pub use params::{ParamError, Params, Weights, Width};
+pub use params::{ParamError, Params, REFERENCE_COMPLIANCE, Weights, Width, compliance_factor};
 pub use topology::Topology;
 pub use update::Environment;
 
@@ -59,15 +61,16 @@ use glam::Vec3;
 use collision::Contact;
 use constraints::{NoRecord, Particles, Recorder, stretch};
 use diagnostics::FamilyRecorder;
+use update::{FREE, Reference};
 
 /// The four constraint families of the adjust phase.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Family {
-    /// Length limit on weft, warp and shear edges.
+    /// Length limit on weft and warp edges, and the tethers.
     Stretch,
     /// Co-planarity of neighbours.
     Planarity,
-    /// Co-normality of neighbours.
+    /// Co-normality of neighbours, and in-plane shear.
     Normality,
     /// Co-circularity of bend pairs.
     Curvature,
@@ -187,10 +190,17 @@ pub struct Solver {
     colliders: Vec<Collider>,
     bodies: Vec<Pose>,
     tethers: Vec<stretch::Tether>,
+    /// Whether the attachments changed since the tethers were built.
+    tethers_stale: bool,
+    /// Per particle, the body damping measures its motion against.
+    reference_body: Vec<u32>,
+    multipliers: Multipliers,
     rest_position: Vec<Vec3>,
     // Scratch, kept to avoid allocating per step.
     sub_from: Vec<Pose>,
     sub_to: Vec<Pose>,
+    /// The bodies' poses at the start of the last substep (its end is `sub_from`).
+    last_from: Vec<Pose>,
     collider_from: Vec<Pose>,
     collider_to: Vec<Pose>,
     contacts: Vec<Contact>,
@@ -216,10 +226,16 @@ impl Solver {
             colliders: Vec::new(),
             bodies: bodies.to_vec(),
             tethers: Vec::new(),
-            rest_position: state.position.clone(),
+            tethers_stale: false,
+            reference_body: vec![FREE; n],
+            multipliers: Multipliers::default(),
+            rest_position: (0..spec.warp)
+                .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))
+                .collect(),
             last_good: state.clone(),
             sub_from: Vec::with_capacity(bodies.len()),
             sub_to: Vec::with_capacity(bodies.len()),
+            last_from: bodies.to_vec(),
             collider_from: Vec::new(),
             collider_to: Vec::new(),
             contacts: vec![Contact::default(); n],
@@ -286,8 +302,7 @@ impl Solver {
         } else {
             1.0 / self.spec.particle_inertia()
         };
-        let driven: Vec<usize> = self.attachments.iter().map(|a| a.particle).collect();
-        self.tethers = stretch::tethers(&self.rest_position, &driven);
+        self.tethers_stale = true;
         Ok(())
     }
 
@@ -390,23 +405,30 @@ impl Solver {
         self.steps
     }
 
-    /// The forced-rotation function in force for substep length `dt`.
+    /// The forced-rotation function (Eq. 3) in force.
     pub fn forced_rotation(&self) -> ForcedRotation {
-        let h = match self.params.h {
-            Width::Fixed(h) => h,
-            Width::Auto => {
-                let (dx, dy) = self.spec.spacing();
-                ForcedRotation::auto_width(
-                    self.spec.particle_mass(),
-                    self.spec.particle_inertia(),
-                    self.params.substep_dt(),
-                    0.5 * (dx + dy),
-                )
-            }
-        };
         ForcedRotation {
             phi: self.params.phi,
-            h,
+            h: self.params.width(),
+        }
+    }
+
+    /// Builds the tethers and each particle's reference body from the
+    /// attachments, once after they change (not on every attach).
+    fn refresh_tethers(&mut self) {
+        if !self.tethers_stale {
+            return;
+        }
+        self.tethers_stale = false;
+        let driven: Vec<usize> = self.attachments.iter().map(|a| a.particle).collect();
+        let (dx, dy) = self.spec.spacing();
+        self.tethers = stretch::tethers(&self.rest_position, &driven, dx.min(dy));
+        self.reference_body.fill(FREE);
+        for a in &self.attachments {
+            self.reference_body[a.particle] = a.body as u32;
+        }
+        for t in &self.tethers {
+            self.reference_body[t.particle as usize] = self.reference_body[t.anchor as usize];
         }
     }
 
@@ -442,6 +464,7 @@ impl Solver {
             d.clear_step();
         }
         self.last_good.copy_from(&self.state);
+        self.refresh_tethers();
         let substeps = self.params.substeps;
         let dt = self.params.substep_dt();
         let rot = self.forced_rotation();
@@ -456,7 +479,9 @@ impl Solver {
                 self.sub_from.push(from.lerp(to, f0));
                 self.sub_to.push(from.lerp(to, f1));
             }
-            if let Err((phase, particle, quantity, value)) = self.substep(env, dt, &rot) {
+            let result = self.substep(env, dt, &rot);
+            std::mem::swap(&mut self.last_from, &mut self.sub_from);
+            if let Err((phase, particle, quantity, value)) = result {
                 self.state.copy_from(&self.last_good);
                 return Err(StepError::NonFinite {
                     step,
@@ -496,6 +521,11 @@ impl Solver {
             &mut self.state,
             &self.inv_mass,
             &self.inv_inertia,
+            &Reference {
+                body_of: &self.reference_body,
+                from: &self.last_from,
+                to: &self.sub_from,
+            },
             env,
             self.spec.density,
             self.params.substep_damping(),
@@ -516,11 +546,12 @@ impl Solver {
         }
         self.contacts.fill(Contact::default());
         let margin = 0.5 * self.spec.thickness;
+        self.multipliers.reset(&self.topology, self.tethers.len());
+        let compliance = Compliance::new(&self.params.weights, dt);
 
         for _ in 0..self.params.iterations {
             for family in Family::ALL {
-                let weight = self.params.weights.get(family);
-                if weight == 0.0 {
+                if self.params.weights.get(family) == 0.0 {
                     continue;
                 }
                 let p = Particles::new(
@@ -529,13 +560,15 @@ impl Solver {
                     &self.inv_mass,
                     &self.inv_inertia,
                 );
+                let mu = &mut self.multipliers;
                 match self.diagnostics.as_deref_mut() {
                     None => project_family(
                         family,
                         &self.topology,
                         &self.tethers,
                         &p,
-                        weight,
+                        mu,
+                        &compliance,
                         rot,
                         &mut NoRecord,
                     ),
@@ -548,7 +581,8 @@ impl Solver {
                             &self.topology,
                             &self.tethers,
                             &p,
-                            weight,
+                            mu,
+                            &compliance,
                             rot,
                             &mut rec,
                         );
@@ -557,20 +591,7 @@ impl Solver {
                     }
                 }
             }
-            if !self.colliders.is_empty() {
-                let t = self.diagnostics.is_some().then(Instant::now);
-                collision::project(
-                    &mut self.state.position,
-                    &self.inv_mass,
-                    &self.colliders,
-                    &self.collider_to,
-                    margin,
-                    &mut self.contacts,
-                );
-                if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
-                    d.timings.collisions += t.elapsed();
-                }
-            }
+            self.project_colliders(margin);
         }
         if !self.colliders.is_empty() {
             collision::apply_friction(
@@ -581,8 +602,30 @@ impl Solver {
                 &self.collider_to,
                 &self.contacts,
             );
+            // Friction slides along the surface, which on a curved one can
+            // dip a particle back in: one more push keeps every particle out.
+            self.project_colliders(margin);
         }
         self.check_finite("adjust")
+    }
+
+    /// Pushes every free particle out of every collider (timed in diagnostics).
+    fn project_colliders(&mut self, margin: f32) {
+        if self.colliders.is_empty() {
+            return;
+        }
+        let t = self.diagnostics.is_some().then(Instant::now);
+        collision::project(
+            &mut self.state.position,
+            &self.inv_mass,
+            &self.colliders,
+            &self.collider_to,
+            margin,
+            &mut self.contacts,
+        );
+        if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
+            d.timings.collisions += t.elapsed();
+        }
     }
 
     /// Puts every driven particle where its body holds it at the substep's end.
@@ -616,48 +659,129 @@ impl Solver {
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);
 
+/// Each family's compliance for one substep, `α̃ = α_ref · ((1 − λ)/λ)² / Δt²`
+/// (for a square cell; each constraint divides by its aspect).
+struct Compliance {
+    stretch: f32,
+    shear: f32,
+    planarity: f32,
+    normality: f32,
+    curvature: f32,
+}
+
+impl Compliance {
+    fn new(w: &Weights, dt: f32) -> Self {
+        let r = &REFERENCE_COMPLIANCE;
+        let of = |reference: f32, weight: f32| reference * compliance_factor(weight) / (dt * dt);
+        Self {
+            stretch: of(r.stretch, w.stretch),
+            shear: of(r.shear, w.normality),
+            planarity: of(r.planarity, w.planarity),
+            normality: of(r.normality, w.normality),
+            curvature: of(r.curvature, w.curvature),
+        }
+    }
+}
+
+/// The multipliers `μ` of every constraint over the current substep, in the
+/// same order as the constraints.
+#[derive(Clone, Debug, Default)]
+struct Multipliers {
+    structural: Vec<f32>,
+    tethers: Vec<f32>,
+    shear: Vec<f32>,
+    normality: Vec<f32>,
+    planarity: Vec<[f32; 2]>,
+    curvature: Vec<[f32; 2]>,
+}
+
+impl Multipliers {
+    /// All zero, sized for `topology` and `tethers` tethers: each substep
+    /// starts from no accumulated correction.
+    fn reset(&mut self, topology: &Topology, tethers: usize) {
+        let zero = |v: &mut Vec<f32>, n: usize| {
+            v.clear();
+            v.resize(n, 0.0);
+        };
+        let zero2 = |v: &mut Vec<[f32; 2]>, n: usize| {
+            v.clear();
+            v.resize(n, [0.0; 2]);
+        };
+        zero(&mut self.structural, topology.structural.len());
+        zero(&mut self.tethers, tethers);
+        zero(&mut self.shear, topology.shear.len());
+        zero(&mut self.normality, topology.structural.len());
+        zero2(&mut self.planarity, topology.structural.len());
+        zero2(&mut self.curvature, topology.bend.len());
+    }
+}
+
 /// Projects every constraint of one family once, colour batch by colour batch.
+#[allow(clippy::too_many_arguments)]
 fn project_family<R: Recorder>(
     family: Family,
     topology: &Topology,
     tethers: &[stretch::Tether],
     p: &Particles,
-    weight: f32,
+    mu: &mut Multipliers,
+    k: &Compliance,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
     use constraints::{curvature, normality, planarity, project_batches};
+    let (structural, shear, bend) = (&topology.structural, &topology.shear, &topology.bend);
     match family {
         Family::Stretch => {
-            for set in [&topology.structural, &topology.shear] {
-                project_batches(&set.items, &set.batches, rec, |c, r| {
-                    stretch::project(p, c, weight, r)
-                });
-            }
+            project_batches(
+                &structural.items,
+                &mut mu.structural,
+                &structural.batches,
+                rec,
+                |c, m, r| stretch::project(p, c, m, k.stretch, r),
+            );
             // Each tether moves only its own particle: one batch.
             let whole = 0..tethers.len();
-            project_batches(tethers, std::slice::from_ref(&whole), rec, |t, r| {
-                stretch::project_tether(p, t, weight, r)
-            });
+            project_batches(
+                tethers,
+                &mut mu.tethers,
+                std::slice::from_ref(&whole),
+                rec,
+                |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
+            );
         }
         Family::Planarity => {
-            let set = &topology.structural;
-            project_batches(&set.items, &set.batches, rec, |c, r| {
-                planarity::project(p, c, weight, rot, r)
-            });
+            project_batches(
+                &structural.items,
+                &mut mu.planarity,
+                &structural.batches,
+                rec,
+                |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
+            );
         }
         Family::Normality => {
-            for set in [&topology.structural, &topology.shear] {
-                project_batches(&set.items, &set.batches, rec, |c, r| {
-                    normality::project(p, c, weight, rot, r)
-                });
-            }
+            project_batches(
+                &structural.items,
+                &mut mu.normality,
+                &structural.batches,
+                rec,
+                |c, m, r| normality::project(p, c, m, k.normality, rot, r),
+            );
+            project_batches(
+                &shear.items,
+                &mut mu.shear,
+                &shear.batches,
+                rec,
+                |c, m, r| stretch::project(p, c, m, k.shear, r),
+            );
         }
         Family::Curvature => {
-            let set = &topology.bend;
-            project_batches(&set.items, &set.batches, rec, |c, r| {
-                curvature::project(p, c, weight, rot, r)
-            });
+            project_batches(
+                &bend.items,
+                &mut mu.curvature,
+                &bend.batches,
+                rec,
+                |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
+            );
         }
     }
 }

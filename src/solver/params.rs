@@ -11,16 +11,25 @@ use std::fmt;
 use super::Family;
 
 /// The per-family constraint weights `λ`, each in `[0, 1]`.
+///
+/// A weight sets how stiff its family is, independently of iterations,
+/// substeps and resolution: `λ = 0` turns the family off, `λ = 1` makes it
+/// rigid, and in between its compliance (inverse stiffness, XPBD's `α`) is
+/// [`compliance_factor`]`(λ)` times the family's reference compliance
+/// ([`REFERENCE_COMPLIANCE`]): `((1 − λ) / λ)²`, so `λ = ½` is the
+/// reference material and each step of 0.1 around it is about a factor of
+/// two in stiffness. See `docs/method.md` ("Weights").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Weights {
-    /// Length limit on weft, warp and shear edges.
+    /// Length limit on weft and warp edges (and the tethers).
     pub stretch: f32,
     /// Co-planarity of neighbours (each lies in the other's tangent plane).
     pub planarity: f32,
-    /// Co-normality: neighbouring normals agree.
+    /// Co-normality of neighbours (their normals agree) and, as the paper
+    /// pairs them, in-plane shear (the cell diagonals).
     pub normality: f32,
-    /// Co-circularity of bend pairs: smooth curvature.
+    /// Co-circularity of bend runs: smooth curvature.
     pub curvature: f32,
 }
 
@@ -57,10 +66,53 @@ impl Weights {
     }
 }
 
+/// The reference compliances `α_ref` (at `λ = ½`) of the constraint kinds,
+/// for a square cell. A cell of aspect `w / L` (extent across the constraint
+/// over its length) divides them by `w / L`, so that the same physical cloth
+/// behaves the same at any resolution (see `docs/method.md`).
+pub struct ReferenceCompliance {
+    /// Weft and warp edges, m/N: the inverse of the cloth's stretch
+    /// stiffness `E·t` (1000 N/m at `λ = ½`).
+    pub stretch: f32,
+    /// Cell diagonals (shear, under the normality weight), m/N: the inverse
+    /// of the in-plane shear stiffness `G·t` (2 N/m at `λ = ½`).
+    pub shear: f32,
+    /// Planarity angles, 1/(N·m): the inverse of the rigidity tying each
+    /// normal to the surface around it (1e-5 N·m at `λ = ½`).
+    pub planarity: f32,
+    /// Normality angles, 1/(N·m): the inverse of the rigidity with which
+    /// neighbouring normals agree (1e-5 N·m at `λ = ½`).
+    pub normality: f32,
+    /// Curvature angles, 1/(N·m): the inverse of the bending rigidity `B`
+    /// (1e-5 N·m at `λ = ½`, a light cotton).
+    pub curvature: f32,
+}
+
+/// The reference compliances weft uses.
+pub const REFERENCE_COMPLIANCE: ReferenceCompliance = ReferenceCompliance {
+    stretch: 1e-3,
+    shear: 0.5,
+    planarity: 1e5,
+    normality: 1e5,
+    curvature: 1e5,
+};
+
+/// How a weight scales its family's reference compliance: `((1 − λ) / λ)²`
+/// (0 at `λ = 1`, 1 at `λ = ½`, unbounded as `λ → 0`).
+#[inline]
+pub fn compliance_factor(weight: f32) -> f32 {
+    if weight >= 1.0 {
+        return 0.0;
+    }
+    let r = (1.0 - weight) / weight.max(1e-6);
+    r * r
+}
+
 /// The width `h` of the forced-rotation envelope (Eq. 3).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub enum Width {
-    /// Derived from mass, inertia and Δt (see `docs/method.md`, Eq. 3).
+    /// The default, [`DEFAULT_WIDTH`](super::forced_rotation::DEFAULT_WIDTH):
+    /// one angle for every resolution and substep (see `docs/method.md`, Eq. 3).
     #[default]
     Auto,
     /// A fixed, dimensionless width `h ≥ 0`, in radians.
@@ -110,8 +162,9 @@ impl<'de> Deserialize<'de> for Width {
 #[serde(deny_unknown_fields, default)]
 pub struct Params {
     /// Damping `k ∈ [0, 1]` of the Störmer update, for position and orientation:
-    /// the fraction of velocity kept over one `Δt` (1 keeps all, 0 none),
-    /// applied as `k^(1/substeps)` per substep.
+    /// the fraction of velocity *relative to what the cloth hangs from* kept
+    /// over one `Δt` (1 keeps all, 0 none), applied as `k^(1/substeps)` per
+    /// substep. Uniform motion is never damped (see [`update`](super::update)).
     pub damping: f32,
     /// Constraint weights `λ` per family.
     pub weights: Weights,
@@ -134,9 +187,9 @@ impl Default for Params {
             weights: Weights::default(),
             phi: std::f32::consts::FRAC_PI_4,
             h: Width::Auto,
-            iterations: 10,
+            iterations: 4,
             dt: 1.0 / 60.0,
-            substeps: 4,
+            substeps: 8,
         }
     }
 }
@@ -255,6 +308,14 @@ impl Params {
     /// kept of the velocity over a whole `Δt`, whatever the substeps.
     pub fn substep_damping(&self) -> f32 {
         self.damping.powf(1.0 / self.substeps as f32)
+    }
+
+    /// The width `h` of Eq. 3 in force.
+    pub fn width(&self) -> f32 {
+        match self.h {
+            Width::Auto => super::forced_rotation::DEFAULT_WIDTH,
+            Width::Fixed(h) => h,
+        }
     }
 
     /// The substep length `Δt / substeps`, in seconds.

@@ -25,6 +25,10 @@ pub struct Pair {
     pub b: u32,
     /// Distance between them at rest, in metres.
     pub rest: f32,
+    /// The cloth's extent across the constraint over its length, `w / L`
+    /// (1 on a square grid): a constraint's compliance is divided by it, so
+    /// the same cloth is equally stiff at any resolution.
+    pub aspect: f32,
 }
 
 /// Three particles in a row, two edges long: the ends and the middle.
@@ -38,6 +42,8 @@ pub struct Triple {
     pub b: u32,
     /// Distance between the ends at rest, in metres.
     pub rest: f32,
+    /// The cloth's extent across the run over one edge's length (see [`Pair::aspect`]).
+    pub aspect: f32,
 }
 
 /// A constraint's particles, for colouring.
@@ -148,12 +154,21 @@ impl Topology {
         let (nx, ny) = (spec.weft, spec.warp);
         let n = spec.len();
         let idx = |i: u32, j: u32| spec.index(i, j) as u32;
+        let (dx, dy) = spec.spacing();
+        // Across over along: a weft edge (along X) stands for a strip dy
+        // wide, a warp edge for one dx wide; a diagonal for a square's worth.
+        let aspect = |a: (u32, u32), b: (u32, u32)| match (a.0 == b.0, a.1 == b.1) {
+            (false, true) => dy / dx,
+            (true, false) => dx / dy,
+            _ => 1.0,
+        };
         let pair = |a: (u32, u32), b: (u32, u32)| Pair {
             a: idx(a.0, a.1),
             b: idx(b.0, b.1),
             rest: spec
                 .rest_position(a.0, a.1)
                 .distance(spec.rest_position(b.0, b.1)),
+            aspect: aspect(a, b),
         };
         let mut structural = Vec::new();
         let mut shear = Vec::new();
@@ -180,6 +195,7 @@ impl Topology {
                         mid: idx(i + 1, j),
                         b: p.b,
                         rest: p.rest,
+                        aspect: p.aspect,
                     });
                 }
                 if j + 2 < ny {
@@ -189,6 +205,7 @@ impl Topology {
                         mid: idx(i, j + 1),
                         b: p.b,
                         rest: p.rest,
+                        aspect: p.aspect,
                     });
                 }
             }

@@ -1,14 +1,17 @@
 //! The update phase of §3.2: every particle moves on its own.
 //!
 //! Störmer integration with damping `k`, velocity approximated by the last
-//! displacement:
+//! displacement, damped relative to the reference motion `r` of what the
+//! particle hangs from (Müller et al. 2007 §3.5 damp only what is not
+//! carried along):
 //!
 //! ```text
-//! Δx(t+Δt) = k · (x(t) − x(t−Δt)) + a(t) · Δt²,   x_update = x(t) + Δx(t+Δt)
+//! Δx(t+Δt) = r + k · (x(t) − x(t−Δt) − r) + a(t) · Δt²,   x_update = x(t) + Δx(t+Δt)
 //! ```
 //!
 //! Orientation is advanced the same way: the last rotation
-//! `q(t) q(t−Δt)⁻¹`, as a rotation vector scaled by `k`, is applied again.
+//! `q(t) q(t−Δt)⁻¹`, relative to the reference body's own turn, as a
+//! rotation vector scaled by `k`, is applied again on top of that turn.
 //!
 //! The acceleration is gravity plus wind acting on the oriented element. With
 //! relative wind `u = v_air − v` and normal `n`, the pressure on the element is
@@ -19,9 +22,12 @@
 //! substep is capped at the relative velocity itself, so a light element is
 //! carried along by the wind instead of overshooting it.
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
-use super::cloth::{ClothState, normal_of, rotate};
+use super::{
+    cloth::{ClothState, normal_of, rotate},
+    collision::Pose,
+};
 
 /// What acts on the cloth from outside, constant over one step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,12 +77,35 @@ pub fn wind_acceleration(env: &Environment, areal_density: f32, n: Vec3, v: Vec3
     cap(normal, un.abs()) + cap(tangent, ut.length())
 }
 
+/// What damping measures velocities against: for each particle, the body
+/// whose motion it follows (its tether's anchor's body), or the cloth's own
+/// mean motion for a cloth that hangs from nothing.
+pub(crate) struct Reference<'a> {
+    /// Per particle, the index of its reference body; [`FREE`] for none.
+    pub body_of: &'a [u32],
+    /// Each body's pose at the start and at the end of the last substep.
+    pub from: &'a [Pose],
+    /// See `from`.
+    pub to: &'a [Pose],
+}
+
+/// [`Reference::body_of`] for a particle that follows no body.
+pub(crate) const FREE: u32 = u32::MAX;
+
 /// Advances every free particle by one substep of length `dt`; pinned
 /// particles (no mass, free orientation) only turn.
+///
+/// Damping keeps a fraction `damping` of each particle's velocity *relative
+/// to its reference motion*: the rigid motion of the body it hangs from
+/// (over the last substep), or the mass-weighted mean motion of the cloth.
+/// Uniform motion, and the motion of whatever carries the cloth, are left
+/// alone, so the result does not depend on the frame of reference; only the
+/// air drag sees world velocity.
 pub(crate) fn integrate(
     state: &mut ClothState,
     inv_mass: &[f32],
     inv_inertia: &[f32],
+    reference: &Reference,
     env: &Environment,
     areal_density: f32,
     damping: f32,
@@ -84,29 +113,58 @@ pub(crate) fn integrate(
 ) {
     let dt2 = dt * dt;
     let with_wind = env.air_density > 0.0 && (env.drag_normal > 0.0 || env.drag_tangent > 0.0);
+    let mean = mean_displacement(state, inv_mass, reference.body_of);
     for i in 0..state.len() {
         let q = state.orientation[i];
+        let body = reference.body_of[i] as usize;
+        let carrier =
+            (body < reference.from.len()).then(|| (reference.from[body], reference.to[body]));
         if inv_mass[i] > 0.0 {
             let x = state.position[i];
-            let disp = x - state.prev_position[i];
+            let prev = state.prev_position[i];
+            let disp = x - prev;
+            let carried = match carrier {
+                Some((from, to)) => to.transform_point(from.inverse_transform_point(prev)) - prev,
+                None => mean,
+            };
             let mut acc = env.gravity;
             if with_wind {
                 acc += wind_acceleration(env, areal_density, normal_of(q), disp / dt, dt);
             }
             state.prev_position[i] = x;
-            state.position[i] = x + disp * damping + acc * dt2;
+            state.position[i] = x + carried + (disp - carried) * damping + acc * dt2;
         }
         if inv_inertia[i] > 0.0 {
-            let mut turn = q * state.prev_orientation[i].conjugate();
-            if turn.w < 0.0 {
-                turn = -turn;
+            let carried = carrier.map_or(Quat::IDENTITY, |(from, to)| {
+                (to.rotation * from.rotation.conjugate()).normalize()
+            });
+            let mut relative = q * state.prev_orientation[i].conjugate() * carried.conjugate();
+            if relative.w < 0.0 {
+                relative = -relative;
             }
             state.prev_orientation[i] = q;
-            state.orientation[i] = rotate(q, rotation_vector(turn) * damping);
+            state.orientation[i] = rotate(carried * q, rotation_vector(relative) * damping);
         }
     }
 }
 
+/// The mass-weighted mean displacement over the last substep of the free
+/// particles that follow no body (zero if there are none).
+fn mean_displacement(state: &ClothState, inv_mass: &[f32], body_of: &[u32]) -> Vec3 {
+    let (mut sum, mut weight) = (glam::DVec3::ZERO, 0.0f64);
+    for i in 0..state.len() {
+        if inv_mass[i] > 0.0 && body_of[i] == FREE {
+            let m = 1.0 / inv_mass[i] as f64;
+            sum += (state.position[i] - state.prev_position[i]).as_dvec3() * m;
+            weight += m;
+        }
+    }
+    if weight > 0.0 {
+        (sum / weight).as_vec3()
+    } else {
+        Vec3::ZERO
+    }
+}
 /// The rotation vector (axis × angle) of a unit quaternion with `w ≥ 0`.
 /// Unlike glam's, it never asserts: a NaN stays a NaN for the step to report.
 #[inline]

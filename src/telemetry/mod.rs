@@ -190,6 +190,20 @@ impl Telemetry {
                         .with_colors([colour]),
                     )?
                 }
+                ShapeKind::Cylinder => {
+                    let h = c.half_length.unwrap_or(0.0);
+                    self.rec.log_static(
+                        path,
+                        &rerun::Cylinders3D::from_lengths_and_radii(
+                            [2.0 * h],
+                            [c.radius.unwrap_or(0.0)],
+                        )
+                        .with_centers([c.position])
+                        .with_quaternions([rotation])
+                        .with_colors([colour])
+                        .with_fill_mode(rerun::FillMode::Solid),
+                    )?
+                }
                 ShapeKind::Box => self.rec.log_static(
                     path,
                     &rerun::Boxes3D::from_centers_and_half_sizes(

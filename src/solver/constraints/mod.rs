@@ -1,21 +1,36 @@
 //! The adjust phase's geometric constraints (§3.3), one module per family.
 //!
-//! Every family is a scalar violation `C` of a pair of particles whose
+//! Every family is a scalar violation `C` of two or three particles whose
 //! gradient reproduces the vectors printed in the paper:
 //!
 //! | family | violation `C` | gradient in position | gradient in rotation |
 //! |---|---|---|---|
 //! | stretch | `|s| − L` (and tethers, one-sided) | `∓ ŝ` | — |
 //! | planarity | `α = asin(n_a · ŝ)`, zero iff `n_a · s = 0` | `∓ n⊥ / |s|` | unit `n_a × ŝ` (the paper's `v`) |
-//! | normality | `∠(n_a, n_b)` | — | `n_a × n_b` |
-//! | curvature | sagitta `n̂ · (x_m − ½(x_a + x_b))`; bend angle | `n̂⊥`, `−½ n̂⊥` | `(n_a + n_b) × s` |
+//! | normality | `∠(n_a, n_b)`; shear: diagonal `|s| − L` | —; `∓ ŝ` | `n_a × n_b`; — |
+//! | curvature | sagitta angle `2 n̂⊥ · (x_m − ½(x_a + x_b)) / L`; bend angle | `n̂⊥`, `−½ n̂⊥` | `(n_a + n_b) × s` |
 //!
 //! with `s = x_b − x_a`, `n⊥` the normal made perpendicular to the edge and
-//! `n̂⊥` the normalised `n_a + n_b` made perpendicular to the chord. A projection changes positions and orientations as
-//! little as possible in the metric of mass and inertia (§3.4): with inverse
-//! masses `w`, inverse inertias `β` and gradients `g`, the multiplier is
-//! `Δ = −λ C / Σ (w|g_x|² + β|g_θ|²)`, each particle moves by `w g_x Δ` and
-//! turns by `β g_θ Δ`, the turn shaped by Eq. 3 ([`ForcedRotation`]).
+//! `n̂⊥` the normalised `n_a + n_b` made perpendicular to the chord.
+//!
+//! **Projection (§3.4, in compliance form).** A correction changes positions
+//! and orientations as little as possible in the metric of mass and inertia.
+//! With inverse masses `w`, inverse inertias `β` and gradients `g`, each
+//! constraint keeps a multiplier `μ` over the substep (XPBD, Macklin et al.
+//! 2016) and every sweep applies
+//!
+//! ```text
+//! Δμ = (−C − α̃ μ) / (Σ w|g_x|² + Σ β|g_θ|² + α̃),   α̃ = α / Δt²
+//! ```
+//!
+//! moving each particle by `w g_x Δμ` and turning it by `β g_θ Δμ`. The
+//! compliance `α` comes from the family's weight `λ` (see
+//! [`Weights`](super::Weights)): `λ = 1` is rigid (`α = 0`, plain projection),
+//! smaller weights are softer. Because `α` is a physical compliance, the
+//! stiffness a weight gives does not change with iterations or substeps.
+//! Every turn is shaped by Eq. 3 ([`ForcedRotation::scale`]); when Eq. 3 cuts
+//! a turn, the constraint's `Δμ`, and with it its translations, is cut by
+//! the same fraction.
 
 pub mod curvature;
 pub mod normality;
@@ -24,7 +39,9 @@ pub mod stretch;
 
 use glam::{Quat, Vec3};
 
-use super::{cloth::rotate, forced_rotation::ForcedRotation};
+use super::cloth::rotate;
+#[cfg(doc)]
+use super::forced_rotation::ForcedRotation;
 
 /// What a projection reads and writes: positions and orientations through
 /// per-index accessors, masses and inertias as slices.
@@ -57,6 +74,9 @@ impl<'a> Particles<'a> {
         inv_inertia: &'a [f32],
     ) -> Self {
         assert!(x.len() == q.len() && x.len() == inv_mass.len() && x.len() == inv_inertia.len());
+        // Every index a projection uses comes from the topology or the
+        // tethers, both built for this cloth and checked in debug builds
+        // (`Topology::grid`, `stretch::tethers`): in bounds by construction.
         Self {
             len: x.len(),
             x: x.as_mut_ptr(),
@@ -70,7 +90,7 @@ impl<'a> Particles<'a> {
     /// Position of particle `i`.
     #[inline(always)]
     pub fn x(&self, i: usize) -> Vec3 {
-        assert!(i < self.len);
+        debug_assert!(i < self.len);
         // SAFETY: in bounds; exclusive per batch (see the type's docs).
         unsafe { *self.x.add(i) }
     }
@@ -78,21 +98,21 @@ impl<'a> Particles<'a> {
     /// Orientation of particle `i`.
     #[inline(always)]
     pub fn q(&self, i: usize) -> Quat {
-        assert!(i < self.len);
+        debug_assert!(i < self.len);
         // SAFETY: in bounds; exclusive per batch (see the type's docs).
         unsafe { *self.q.add(i) }
     }
 
     #[inline(always)]
     fn set_x(&self, i: usize, v: Vec3) {
-        assert!(i < self.len);
+        debug_assert!(i < self.len);
         // SAFETY: in bounds; exclusive per batch (see the type's docs).
         unsafe { *self.x.add(i) = v }
     }
 
     #[inline(always)]
     fn set_q(&self, i: usize, v: Quat) {
-        assert!(i < self.len);
+        debug_assert!(i < self.len);
         // SAFETY: in bounds; exclusive per batch (see the type's docs).
         unsafe { *self.q.add(i) = v }
     }
@@ -133,34 +153,47 @@ const PARALLEL_MIN: usize = 4096;
 /// Constraints per parallel task.
 const CHUNK: usize = 1024;
 
-/// Projects `items` colour batch by colour batch with `project`; large
-/// batches are split across rayon's threads. Within a batch the order does
-/// not matter (no shared particles), so the result is bit-identical for any
-/// number of threads.
-pub(crate) fn project_batches<T, R>(
+/// The XPBD step of one constraint: the change of its multiplier `μ` for a
+/// violation `c`, a generalised inverse mass `w` and a compliance
+/// `alpha_t = α / Δt²`.
+#[inline(always)]
+pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
+    (-c - alpha_t * mu) / (w + alpha_t)
+}
+
+/// Projects `items` colour batch by colour batch with `project`, each with
+/// its own multiplier in `mu` (same index); large batches are split across
+/// rayon's threads. Within a batch the order does not matter (no shared
+/// particles), so the result is bit-identical for any number of threads.
+pub(crate) fn project_batches<T, M, R>(
     items: &[T],
+    mu: &mut [M],
     batches: &[std::ops::Range<usize>],
     rec: &mut R,
-    project: impl Fn(T, &mut R) + Sync,
+    project: impl Fn(T, &mut M, &mut R) + Sync,
 ) where
     T: Copy + Sync,
+    M: Send,
     R: Recorder,
 {
     use rayon::prelude::*;
+    debug_assert_eq!(items.len(), mu.len());
     for range in batches {
         let batch = &items[range.clone()];
+        let mu = &mut mu[range.clone()];
         if batch.len() < PARALLEL_MIN || rayon::current_num_threads() == 1 {
-            for &c in batch {
-                project(c, rec);
+            for (&c, m) in batch.iter().zip(mu) {
+                project(c, m, rec);
             }
         } else {
             let base: &R = rec;
             let gathered = batch
                 .par_chunks(CHUNK)
-                .map(|chunk| {
+                .zip(mu.par_chunks_mut(CHUNK))
+                .map(|(chunk, mu)| {
                     let mut r = base.fork();
-                    for &c in chunk {
-                        project(c, &mut r);
+                    for (&c, m) in chunk.iter().zip(mu) {
+                        project(c, m, &mut r);
                     }
                     r
                 })
@@ -176,30 +209,13 @@ pub(crate) fn project_batches<T, R>(
     }
 }
 
-/// Turns particle `i` by the forced rotation for the requested rotation
-/// vector `omega` (axis × full angle).
+/// Turns particle `i` by the rotation vector `omega` (axis × angle), which
+/// the caller has already shaped with Eq. 3.
 #[inline]
-pub(crate) fn turn<R: Recorder>(
-    p: &Particles,
-    i: usize,
-    omega: Vec3,
-    rot: &ForcedRotation,
-    rec: &mut R,
-) {
-    let full = omega.length();
-    // Written so that NaN also returns: a non-finite state is reported by
-    // the step, never turned into a panic here.
-    if full.is_nan() || full <= 1e-12 {
-        return;
-    }
-    let angle = rot.angle(full);
-    if angle.is_nan() || angle <= 0.0 {
-        return;
-    }
-    let turn = omega * (angle / full);
-    p.set_q(i, rotate(p.q(i), turn));
+pub(crate) fn turn<R: Recorder>(p: &Particles, i: usize, omega: Vec3, rec: &mut R) {
+    p.set_q(i, rotate(p.q(i), omega));
     if R::ON {
-        rec.turned(i, turn);
+        rec.turned(i, omega);
     }
 }
 
