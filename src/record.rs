@@ -128,9 +128,9 @@ impl Run {
         name: &str,
         resolved: &str,
     ) -> Result<Self, RunError> {
-        scene
-            .solver_mut()
-            .set_diagnostics(telemetry.needs_diagnostics());
+        let solver = scene.solver_mut();
+        solver.set_diagnostics(telemetry.needs_diagnostics());
+        solver.record_corrections(telemetry.needs_corrections());
         let mut run = Self {
             figures: Figures {
                 preset: name.to_string(),

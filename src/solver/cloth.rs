@@ -292,14 +292,25 @@ pub fn normal_of(q: Quat) -> Vec3 {
     )
 }
 
-/// Rotates `q` by the rotation vector `r` (axis × angle), exactly.
+/// Rotates `q` by the rotation vector `r` (axis × angle), exactly, and
+/// renormalises.
+///
+/// A non-finite `r` gives a non-finite quaternion (never a panic), for the
+/// step to report.
+#[inline]
+pub fn rotate(q: Quat, r: Vec3) -> Quat {
+    turn_by(q, r).normalize()
+}
+
+/// Rotates `q` by the rotation vector `r` without renormalising: the turn
+/// `(cos ½θ, sin ½θ · axis)` is a unit quaternion to rounding, so the result
+/// keeps `q`'s length to about 1e-7.
 ///
 /// Small angles, by far the most common, use the half-angle series of
 /// `(cos ½θ, sin ½θ · axis)` to fourth order (error below 1e-9 for
-/// θ < 0.05), avoiding the trigonometric calls. A non-finite `r` gives a
-/// non-finite quaternion (never a panic), for the step to report.
+/// θ < 0.05), avoiding the trigonometric calls.
 #[inline]
-pub fn rotate(q: Quat, r: Vec3) -> Quat {
+pub fn turn_by(q: Quat, r: Vec3) -> Quat {
     let t2 = r.length_squared();
     let d = if t2 < 0.0025 {
         // cos(θ/2) ≈ 1 − θ²/8 + θ⁴/384,  sin(θ/2)/θ ≈ ½ − θ²/48 + θ⁴/3840
@@ -314,5 +325,5 @@ pub fn rotate(q: Quat, r: Vec3) -> Quat {
     } else {
         return Quat::from_xyzw(f32::NAN, f32::NAN, f32::NAN, f32::NAN);
     };
-    (d * q).normalize()
+    d * q
 }

@@ -61,6 +61,10 @@ pub struct Timings {
 pub struct Diagnostics {
     /// Per family, indexed by [`Family::index`].
     pub families: [FamilyDiagnostics; 4],
+    /// Whether the per-particle corrections (`dx`, `dtheta`, `max_rotation`)
+    /// are recorded; without them the figures and timings still are, at
+    /// less cost.
+    pub corrections: bool,
     /// Largest strain of a weft or warp edge.
     pub max_strain: f32,
     /// Kinetic energy of the free particles, in joules.
@@ -72,7 +76,10 @@ pub struct Diagnostics {
 impl Diagnostics {
     /// Empty diagnostics for `n` particles.
     pub fn new(n: usize) -> Self {
-        let mut d = Self::default();
+        let mut d = Self {
+            corrections: true,
+            ..Self::default()
+        };
         for f in &mut d.families {
             f.dx = vec![Vec3::ZERO; n];
             f.dtheta = vec![Vec3::ZERO; n];
@@ -87,6 +94,9 @@ impl Diagnostics {
 
     /// Clears per-particle corrections before an adjust phase.
     pub(crate) fn clear_corrections(&mut self) {
+        if !self.corrections {
+            return;
+        }
         for f in &mut self.families {
             f.dx.fill(Vec3::ZERO);
             f.dtheta.fill(Vec3::ZERO);

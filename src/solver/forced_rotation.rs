@@ -65,13 +65,14 @@ impl ForcedRotation {
                 full.min(self.phi)
             };
         }
-        let ratio = self.h / violation;
-        // exp(−r) ≥ 1 − r: when even that lower bound of the envelope is
-        // above the full correction, the min is the full correction (exact,
-        // and by far the common case).
-        if full <= self.phi * (1.0 - ratio) {
+        // exp(−r) ≥ 1 − r with r = h / violation: when even that lower bound
+        // of the envelope is above the full correction, the min is the full
+        // correction (exact, and by far the common case; multiplied through
+        // by the violation, so without a division).
+        if full * violation <= self.phi * (violation - self.h) {
             return full;
         }
+        let ratio = self.h / violation;
         let envelope = if ratio <= 0.0 {
             self.phi
         } else if ratio >= 80.0 {

@@ -80,6 +80,13 @@ impl Telemetry {
         self.settings.level != Level::Off
     }
 
+    /// Whether the solver's diagnostics must record every particle's
+    /// corrections: for the arrows (level full) and for colouring by them.
+    pub fn needs_corrections(&self) -> bool {
+        self.settings.level == Level::Full
+            || self.settings.color_by == crate::scene::preset::ColorBy::Correction
+    }
+
     /// Whether frame `frame` is logged.
     pub fn logs_frame(&self, frame: u64) -> bool {
         self.settings.level != Level::Off && frame.is_multiple_of(self.settings.log_every as u64)

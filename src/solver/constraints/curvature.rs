@@ -55,12 +55,12 @@ pub(crate) fn project<R: Recorder>(
     // perpendicular to the chord (so the run bends, not stretches).
     // Gradients 2n̂/L at the middle and −n̂/L at each end (L = rest / 2).
     let (wa, wm, wb) = (p.inv_mass[a], p.inv_mass[m], p.inv_mass[b]);
-    let half = 0.5 * t.rest;
-    let w = (4.0 * wm + wa + wb) / (half * half);
+    let inv_half = 2.0 / t.rest;
+    let w = (4.0 * wm + wa + wb) * inv_half * inv_half;
     if w > 0.0 {
         let d = delta_mu(c, w, alpha_t, mu[0]);
         mu[0] += d;
-        let step = across * (d / half);
+        let step = across * (d * inv_half);
         if wm > 0.0 {
             shift(p, m, step * (2.0 * wm), rec);
         }
@@ -82,7 +82,7 @@ pub(crate) fn project<R: Recorder>(
     if ba + bb <= 0.0 || e_len <= 1e-9 {
         return;
     }
-    let e = e / e_len;
+    let e = e * e_len.recip();
     let bend = super::atan2(na.cross(nb).dot(e), na.dot(nb));
     let mut d = delta_mu(bend, ba + bb, 4.0 * alpha_t, mu[1]);
     d *= rot.scale(bend.abs(), ba.max(bb) * d.abs());
@@ -111,7 +111,7 @@ fn sagitta(xa: Vec3, xm: Vec3, xb: Vec3, rest: f32) -> Option<(f32, Vec3, Vec3)>
     if !(len > 1e-9) {
         return None;
     }
-    Some((2.0 * len / (0.5 * rest), across / len, chord))
+    Some((4.0 * len / rest, across * len.recip(), chord))
 }
 
 /// The sagitta angle `|C|` that the projection removes, in radians.

@@ -61,7 +61,7 @@ fn axis_angle(na: Vec3, nb: Vec3, edge: Vec3) -> Option<(Vec3, f32)> {
     let axis = na.cross(nb);
     let sin = axis.length();
     if sin > 1e-9 {
-        return Some((axis / sin, super::atan2(sin, na.dot(nb))));
+        return Some((axis * sin.recip(), super::atan2(sin, na.dot(nb))));
     }
     if na.dot(nb) >= 0.0 {
         return None;

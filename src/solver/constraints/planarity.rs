@@ -48,14 +48,20 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
     if len <= 1e-9 {
         return None;
     }
-    let dir = s / len;
+    let dir = s * len.recip();
     let sin = n.dot(dir).clamp(-1.0, 1.0);
     let axis = n.cross(dir);
     let cos = axis.length();
     if cos <= 1e-6 {
         return None;
     }
-    Some((super::asin(sin), axis / cos, (n - dir * sin) / cos, len))
+    let inv_cos = cos.recip();
+    Some((
+        super::atan2(sin, cos),
+        axis * inv_cos,
+        (n - dir * sin) * inv_cos,
+        len,
+    ))
 }
 
 /// Brings `o` into the tangent plane of `e`.
@@ -80,14 +86,15 @@ fn one_side<R: Recorder>(
         return;
     };
     let (we, wo, be) = (p.inv_mass[e], p.inv_mass[o], p.inv_inertia[e]);
-    let w = (we + wo) / (len * len) + be;
+    let inv_len = len.recip();
+    let w = (we + wo) * inv_len * inv_len + be;
     if w <= 0.0 {
         return;
     }
     let mut d = delta_mu(alpha, w, alpha_t, *mu);
     d *= rot.scale(alpha.abs(), be * d.abs());
     *mu += d;
-    let step = across * (d / len);
+    let step = across * (d * inv_len);
     if wo > 0.0 {
         shift(p, o, step * wo, rec);
     }

@@ -46,7 +46,7 @@ pub(crate) fn project<R: Recorder>(
     }
     let d = delta_mu(len - pair.rest, w, alpha_t / pair.aspect, *mu);
     *mu += d;
-    let dir = s * (d / len);
+    let dir = s * (d * len.recip());
     if wa > 0.0 {
         shift(p, a, dir * -wa, rec);
     }
