@@ -210,7 +210,7 @@ pub struct Solver {
     attachments: Vec<Attachment>,
     colliders: Vec<Collider>,
     bodies: Vec<Pose>,
-    tethers: Vec<stretch::Tether>,
+    tethers: stretch::Tethers,
     /// Whether the attachments changed since the tethers were built.
     tethers_stale: bool,
     /// Per particle, the body damping measures its motion against.
@@ -246,7 +246,7 @@ impl Solver {
             attachments: Vec::new(),
             colliders: Vec::new(),
             bodies: bodies.to_vec(),
-            tethers: Vec::new(),
+            tethers: stretch::Tethers::default(),
             tethers_stale: false,
             reference_body: vec![FREE; n],
             multipliers: Multipliers::default(),
@@ -457,7 +457,8 @@ impl Solver {
         for a in &self.attachments {
             self.reference_body[a.particle] = a.body as u32;
         }
-        for t in &self.tethers {
+        // The first batch holds each particle's nearest anchor.
+        for t in &self.tethers.items[self.tethers.batches[0].clone()] {
             self.reference_body[t.particle as usize] = self.reference_body[t.anchor as usize];
         }
     }
@@ -576,7 +577,8 @@ impl Solver {
         }
         self.contacts.fill(Contact::default());
         let margin = 0.5 * self.spec.thickness;
-        self.multipliers.reset(&self.topology, self.tethers.len());
+        self.multipliers
+            .reset(&self.topology, self.tethers.items.len());
         let compliance = Compliance::new(&self.params.weights, dt);
 
         for _ in 0..self.params.iterations {
@@ -768,7 +770,7 @@ impl Multipliers {
 fn project_family<R: Recorder>(
     family: Family,
     topology: &Topology,
-    tethers: &[stretch::Tether],
+    tethers: &stretch::Tethers,
     p: &Particles,
     mu: &mut Multipliers,
     k: &Compliance,
@@ -786,12 +788,11 @@ fn project_family<R: Recorder>(
                 rec,
                 |c, m, r| stretch::project(p, c, m, k.stretch, r),
             );
-            // Each tether moves only its own particle: one batch.
-            let whole = 0..tethers.len();
+            // Each particle appears once per tether batch.
             project_batches(
-                tethers,
+                &tethers.items,
                 &mut mu.tethers,
-                std::slice::from_ref(&whole),
+                &tethers.batches,
                 rec,
                 |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
             );

@@ -94,38 +94,94 @@ pub(crate) fn project_tether<R: Recorder>(
     }
 }
 
-/// For every free particle, a tether to the driven particle nearest at rest.
+/// Tethers in two batches: every free particle's tether to its nearest
+/// driven particle, then its tether to the nearest driven particle of
+/// another group of attachments, if there is one. Within a batch each
+/// particle appears once, so a batch may be projected in any order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tethers {
+    /// The tethers, first batch then second.
+    pub items: Vec<Tether>,
+    /// The two batches' ranges in `items`.
+    pub batches: Vec<std::ops::Range<usize>>,
+}
+
+/// Builds the [`Tethers`] of a cloth at rest in `rest` with the particles
+/// `driven` attached. Attachments form a group when they are within 1.5
+/// rest `spacing`s of each other (a flag's pole is one group, a sheet's two
+/// pinned corners are two).
 ///
-/// Linear in the number of particles for the usual case of attachments along
-/// the cloth's border: the candidates are scanned once per free particle,
-/// but only the driven particles are candidates.
-pub fn tethers(rest: &[Vec3], driven: &[usize], spacing: f32) -> Vec<Tether> {
-    if driven.is_empty() {
-        return Vec::new();
-    }
+/// One anchor bounds each particle's distance from its own side only: a
+/// sheet hung by two corners could then sag between them in a shallow V,
+/// with all the stretch in the middle edges. A tether to the nearest anchor
+/// of the other group rules the V out. (Any tether is a true limit of an
+/// inextensible cloth: no two material points can be farther apart than
+/// their distance across the flat cloth.)
+pub fn tethers(rest: &[Vec3], driven: &[usize], spacing: f32) -> Tethers {
     let mut is_driven = vec![false; rest.len()];
     for &d in driven {
         debug_assert!(d < rest.len());
         is_driven[d] = true;
     }
-    (0..rest.len())
-        .filter(|&i| !is_driven[i])
-        .map(|i| {
-            let (anchor, d2) = driven
-                .iter()
-                .map(|&d| (d, rest[d].distance_squared(rest[i])))
-                .fold((driven[0], f32::INFINITY), |best, c| {
-                    if c.1 < best.1 { c } else { best }
-                });
-            let rest = d2.sqrt();
-            Tether {
-                particle: i as u32,
-                anchor: anchor as u32,
-                rest,
-                span: (rest / spacing).max(1.0),
+    let group = groups(rest, driven, 1.5 * spacing);
+    let tether = |particle: usize, anchor: usize| {
+        let rest = rest[anchor].distance(rest[particle]);
+        Tether {
+            particle: particle as u32,
+            anchor: anchor as u32,
+            rest,
+            span: (rest / spacing).max(1.0),
+        }
+    };
+    // The nearest driven particle (by index into `driven`) passing `keep`.
+    let nearest = |i: usize, keep: &dyn Fn(usize) -> bool| {
+        (0..driven.len())
+            .filter(|&k| keep(k))
+            .map(|k| (k, rest[driven[k]].distance_squared(rest[i])))
+            .fold(None, |best: Option<(usize, f32)>, c| match best {
+                Some(b) if b.1 <= c.1 => Some(b),
+                _ => Some(c),
+            })
+            .map(|(k, _)| k)
+    };
+    let (mut first, mut second) = (Vec::new(), Vec::new());
+    for i in (0..rest.len()).filter(|&i| !is_driven[i]) {
+        let Some(a) = nearest(i, &|_| true) else {
+            continue;
+        };
+        first.push(tether(i, driven[a]));
+        if let Some(b) = nearest(i, &|k| group[k] != group[a]) {
+            second.push(tether(i, driven[b]));
+        }
+    }
+    let split = first.len();
+    first.append(&mut second);
+    Tethers {
+        batches: vec![0..split, split..first.len()],
+        items: first,
+    }
+}
+
+/// The group of each driven particle: two are in one group when a chain of
+/// driven particles, each within `reach` of the next, joins them.
+fn groups(rest: &[Vec3], driven: &[usize], reach: f32) -> Vec<usize> {
+    let mut group: Vec<usize> = (0..driven.len()).collect();
+    fn root(group: &mut [usize], mut k: usize) -> usize {
+        while group[k] != k {
+            group[k] = group[group[k]];
+            k = group[k];
+        }
+        k
+    }
+    for a in 0..driven.len() {
+        for b in a + 1..driven.len() {
+            if rest[driven[a]].distance_squared(rest[driven[b]]) <= reach * reach {
+                let (ra, rb) = (root(&mut group, a), root(&mut group, b));
+                group[ra.max(rb)] = ra.min(rb);
             }
-        })
-        .collect()
+        }
+    }
+    (0..driven.len()).map(|k| root(&mut group, k)).collect()
 }
 
 /// The strain of one edge, `| |s| − L | / L`.
