@@ -204,35 +204,37 @@ fn drape_coefficient_spans_real_fabrics_by_the_bending_weight() {
     );
 }
 
-/// 5, 10 and 20 iterations, at 4 substeps.
-#[test]
-fn drape_and_hang_do_not_depend_on_iterations() {
-    let counts = [5, 10, 20];
-    let dc: Vec<f32> = counts
+/// For each of `values` (set by `set`): the drape coefficient from `drape_base`
+/// and the car flag's mean drop after 5 s from its shipped settings.
+fn drape_and_hang(
+    values: &[u32],
+    drape_base: Params,
+    set: impl Fn(Params, u32) -> Params,
+) -> (Vec<f32>, Vec<f32>) {
+    let dc = values
         .iter()
-        .map(|&n| {
-            drape(
-                24,
-                Params {
-                    iterations: n,
-                    substeps: 4,
-                    ..with_curvature(0.7)
-                },
-            )
-        })
+        .map(|&n| drape(24, set(drape_base, n)))
         .collect();
     let (spec, params) = car_flag();
-    let hangs: Vec<f32> = counts
+    let hangs = values
         .iter()
         .map(|&n| {
-            let p = Params {
-                iterations: n,
-                ..params
-            };
-            let (s, start) = flag_run(spec, p, 5.0, |_| Pose::IDENTITY, Vec3::ZERO);
+            let (s, start) = flag_run(spec, set(params, n), 5.0, |_| Pose::IDENTITY, Vec3::ZERO);
             mean_drop(&s, &start)
         })
         .collect();
+    (dc, hangs)
+}
+
+/// 5, 10 and 20 iterations (the drape at 4 substeps, the flag at its 8).
+#[test]
+fn drape_and_hang_do_not_depend_on_iterations() {
+    let counts = [5, 10, 20];
+    let base = Params {
+        substeps: 4,
+        ..with_curvature(0.7)
+    };
+    let (dc, hangs) = drape_and_hang(&counts, base, |p, n| Params { iterations: n, ..p });
     println!("iterations {counts:?}: drape coefficient {dc:?}, flag's mean drop {hangs:?} m");
     assert!(
         spread(&dc) <= 0.05,
@@ -244,35 +246,15 @@ fn drape_and_hang_do_not_depend_on_iterations() {
     );
 }
 
-/// 2, 4 and 8 substeps, at 10 iterations.
+/// 2, 4 and 8 substeps (the drape at 10 iterations, the flag at its 2).
 #[test]
 fn drape_and_hang_do_not_depend_on_substeps() {
     let counts = [2, 4, 8];
-    let dc: Vec<f32> = counts
-        .iter()
-        .map(|&n| {
-            drape(
-                24,
-                Params {
-                    substeps: n,
-                    iterations: 10,
-                    ..with_curvature(0.7)
-                },
-            )
-        })
-        .collect();
-    let (spec, params) = car_flag();
-    let hangs: Vec<f32> = counts
-        .iter()
-        .map(|&n| {
-            let p = Params {
-                substeps: n,
-                ..params
-            };
-            let (s, start) = flag_run(spec, p, 5.0, |_| Pose::IDENTITY, Vec3::ZERO);
-            mean_drop(&s, &start)
-        })
-        .collect();
+    let base = Params {
+        iterations: 10,
+        ..with_curvature(0.7)
+    };
+    let (dc, hangs) = drape_and_hang(&counts, base, |p, n| Params { substeps: n, ..p });
     println!("substeps {counts:?}: drape coefficient {dc:?}, flag's mean drop {hangs:?} m");
     assert!(spread(&dc) <= 0.05, "drape coefficient by substeps: {dc:?}");
     assert!(spread(&hangs) <= 0.05, "flag's hang by substeps: {hangs:?}");

@@ -54,10 +54,10 @@ impl ForcedRotation {
     /// which violations Eq. 3 lets through.
     #[inline]
     pub fn limit(&self, violation: f32, full: f32) -> f32 {
-        if !(full > 0.0) {
+        if full.is_nan() || full <= 0.0 {
             return 0.0;
         }
-        if !(violation > 0.0) {
+        if violation.is_nan() || violation <= 0.0 {
             // No violation: the envelope is closed (h > 0) or Φ (h = 0).
             return if self.h > 0.0 {
                 0.0
@@ -98,7 +98,7 @@ impl ForcedRotation {
     pub fn scale(&self, violation: f32, full: f32) -> f32 {
         // Written so that NaN gives 1: a non-finite state is reported by the
         // step, never turned into a panic or silently zeroed here.
-        if !(full > 0.0) {
+        if full.is_nan() || full <= 0.0 {
             return 1.0;
         }
         let angle = self.limit(violation, full);

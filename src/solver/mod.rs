@@ -592,45 +592,25 @@ impl Solver {
                     &self.inv_mass,
                     &self.inv_inertia,
                 );
+                let sweep = Sweep {
+                    topology: &self.topology,
+                    tethers: &self.tethers,
+                    p: &p,
+                    k: &compliance,
+                    rot,
+                };
                 let mu = &mut self.multipliers;
                 match self.diagnostics.as_deref_mut() {
-                    None => project_family(
-                        family,
-                        &self.topology,
-                        &self.tethers,
-                        &p,
-                        mu,
-                        &compliance,
-                        rot,
-                        &mut NoRecord,
-                    ),
+                    None => sweep.project(family, mu, &mut NoRecord),
                     Some(d) => {
                         let t = Instant::now();
                         let fd = &mut d.families[family.index()];
                         if d.corrections {
                             let mut rec = FamilyRecorder::new(fd);
-                            project_family(
-                                family,
-                                &self.topology,
-                                &self.tethers,
-                                &p,
-                                mu,
-                                &compliance,
-                                rot,
-                                &mut rec,
-                            );
+                            sweep.project(family, mu, &mut rec);
                             fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
                         } else {
-                            project_family(
-                                family,
-                                &self.topology,
-                                &self.tethers,
-                                &p,
-                                mu,
-                                &compliance,
-                                rot,
-                                &mut NoRecord,
-                            );
+                            sweep.project(family, mu, &mut NoRecord);
                         }
                         fd.time += t.elapsed();
                     }
@@ -765,71 +745,81 @@ impl Multipliers {
     }
 }
 
-/// Projects every constraint of one family once, colour batch by colour batch.
-#[allow(clippy::too_many_arguments)]
-fn project_family<R: Recorder>(
-    family: Family,
-    topology: &Topology,
-    tethers: &stretch::Tethers,
-    p: &Particles,
-    mu: &mut Multipliers,
-    k: &Compliance,
-    rot: &ForcedRotation,
-    rec: &mut R,
-) {
-    use constraints::{curvature, normality, planarity, project_batches};
-    let (structural, shear, bend) = (&topology.structural, &topology.shear, &topology.bend);
-    match family {
-        Family::Stretch => {
-            project_batches(
-                &structural.items,
-                &mut mu.structural,
-                &structural.batches,
-                rec,
-                |c, m, r| stretch::project(p, c, m, k.stretch, r),
-            );
-            // Each particle appears once per tether batch.
-            project_batches(
-                &tethers.items,
-                &mut mu.tethers,
-                &tethers.batches,
-                rec,
-                |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
-            );
-        }
-        Family::Planarity => {
-            project_batches(
-                &structural.items,
-                &mut mu.planarity,
-                &structural.batches,
-                rec,
-                |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
-            );
-        }
-        Family::Normality => {
-            project_batches(
-                &structural.items,
-                &mut mu.normality,
-                &structural.batches,
-                rec,
-                |c, m, r| normality::project(p, c, m, k.normality, rot, r),
-            );
-            project_batches(
-                &shear.items,
-                &mut mu.shear,
-                &shear.batches,
-                rec,
-                |c, m, r| stretch::project(p, c, m, k.shear, r),
-            );
-        }
-        Family::Curvature => {
-            project_batches(
-                &bend.items,
-                &mut mu.curvature,
-                &bend.batches,
-                rec,
-                |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
-            );
+/// What every family's projection in one sweep reads: the constraints, the
+/// state, the compliances and Eq. 3.
+struct Sweep<'a> {
+    topology: &'a Topology,
+    tethers: &'a stretch::Tethers,
+    p: &'a Particles<'a>,
+    k: &'a Compliance,
+    rot: &'a ForcedRotation,
+}
+
+impl Sweep<'_> {
+    /// Projects every constraint of one family once, colour batch by colour
+    /// batch, each with its multiplier in `mu`.
+    fn project<R: Recorder>(&self, family: Family, mu: &mut Multipliers, rec: &mut R) {
+        let Self {
+            topology,
+            tethers,
+            p,
+            k,
+            rot,
+        } = *self;
+        use constraints::{curvature, normality, planarity, project_batches};
+        let (structural, shear, bend) = (&topology.structural, &topology.shear, &topology.bend);
+        match family {
+            Family::Stretch => {
+                project_batches(
+                    &structural.items,
+                    &mut mu.structural,
+                    &structural.batches,
+                    rec,
+                    |c, m, r| stretch::project(p, c, m, k.stretch, r),
+                );
+                // Each particle appears once per tether batch.
+                project_batches(
+                    &tethers.items,
+                    &mut mu.tethers,
+                    &tethers.batches,
+                    rec,
+                    |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
+                );
+            }
+            Family::Planarity => {
+                project_batches(
+                    &structural.items,
+                    &mut mu.planarity,
+                    &structural.batches,
+                    rec,
+                    |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
+                );
+            }
+            Family::Normality => {
+                project_batches(
+                    &structural.items,
+                    &mut mu.normality,
+                    &structural.batches,
+                    rec,
+                    |c, m, r| normality::project(p, c, m, k.normality, rot, r),
+                );
+                project_batches(
+                    &shear.items,
+                    &mut mu.shear,
+                    &shear.batches,
+                    rec,
+                    |c, m, r| stretch::project(p, c, m, k.shear, r),
+                );
+            }
+            Family::Curvature => {
+                project_batches(
+                    &bend.items,
+                    &mut mu.curvature,
+                    &bend.batches,
+                    rec,
+                    |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
+                );
+            }
         }
     }
 }

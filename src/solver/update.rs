@@ -101,6 +101,7 @@ pub(crate) const FREE: u32 = u32::MAX;
 /// Uniform motion, and the motion of whatever carries the cloth, are left
 /// alone, so the result does not depend on the frame of reference; only the
 /// air drag sees world velocity.
+#[allow(clippy::too_many_arguments)] // the update's inputs, each a distinct slice or scalar
 pub(crate) fn integrate(
     state: &mut ClothState,
     inv_mass: &[f32],

@@ -108,7 +108,7 @@ fn sagitta(xa: Vec3, xm: Vec3, xb: Vec3, rest: f32) -> Option<(f32, Vec3, Vec3)>
     let offset = xm - 0.5 * (xa + xb);
     let across = offset - chord * (offset.dot(chord) / chord.length_squared().max(1e-18));
     let len = across.length();
-    if !(len > 1e-9) {
+    if len.is_nan() || len <= 1e-9 {
         return None;
     }
     Some((4.0 * len / rest, across * len.recip(), chord))
