@@ -587,3 +587,50 @@ fn results_are_bit_identical_for_any_thread_count() {
     assert_eq!(one, run(3, true));
     assert_eq!(one.0, run(2, false).0);
 }
+
+#[test]
+fn cloth_rotation_and_imperfection_are_checked() {
+    let not_unit = ClothSpec {
+        rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 2.0),
+        ..spec(4)
+    };
+    let err = Solver::new(not_unit, Params::default(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cloth.rotation") && err.contains("unit quaternion"),
+        "{err}"
+    );
+    let too_uneven = ClothSpec {
+        imperfection: 0.5,
+        ..spec(4)
+    };
+    let err = Solver::new(too_uneven, Params::default(), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("cloth.imperfection") && err.contains("allowed"),
+        "{err}"
+    );
+}
+
+/// An element turned exactly upside down is not a fixed point: normality
+/// (alone, so nothing else helps) turns it back.
+#[test]
+fn an_exactly_flipped_normal_turns_back() {
+    let mut s = Solver::new(spec(3), only(Family::Normality), &[]).unwrap();
+    let centre = 4;
+    let st = s.state_mut();
+    st.orientation[centre] = Quat::from_rotation_x(std::f32::consts::PI) * st.orientation[centre];
+    st.prev_orientation[centre] = st.orientation[centre];
+    let flipped = s.state().normal(centre).dot(Vec3::Z);
+    assert!(flipped < -0.999);
+    for _ in 0..30 {
+        s.step(&calm(), &[]).unwrap();
+    }
+    let after = s.state().normal(centre).dot(s.state().normal(0));
+    assert!(
+        after > 0.99,
+        "the flipped element did not turn back: n·n₀ = {after}"
+    );
+}
