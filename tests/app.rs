@@ -7,7 +7,10 @@ use std::time::Duration;
 
 use egui::accesskit::{Action, ActionData, ActionRequest};
 use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
-use weft::app::{panel::Panel, session::Session};
+use weft::app::{
+    panel::Panel,
+    session::{Command, Session},
+};
 use weft::scene::load;
 use weft::telemetry::{paths, read};
 
@@ -212,4 +215,35 @@ fn panel_snapshot() {
         );
     h.run();
     h.snapshot("panel");
+}
+
+/// A session opened at level `summary` and switched to `full` from the
+/// panel draws the corrections from then on: the app keeps every particle's
+/// corrections whatever level it starts at.
+#[test]
+fn switching_to_level_full_draws_the_corrections() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("session.rrd");
+    let overrides = ["telemetry.level=summary".parse().unwrap()];
+    let loaded = load::load("hanging_sheet", &overrides).unwrap();
+    let mut full = loaded.preset.telemetry;
+    full.level = weft::scene::preset::Level::Full;
+    let session = Session::start(loaded, "hanging_sheet".into(), |_| {}).unwrap();
+    session.send(Command::StartRecording(file.clone()));
+    assert!(session.wait_for(WAIT, |s| s.recording.is_some()));
+    session.send(Command::Telemetry(full));
+    for frame in 1..=3 {
+        session.send(Command::Step);
+        assert!(session.wait_for(WAIT, |s| s.frame == frame));
+    }
+    session.send(Command::StopRecording);
+    assert!(session.wait_for(WAIT, |s| s.recording.is_none()));
+
+    let rec = read::read(&file).unwrap();
+    let path = paths::correction(weft::solver::Family::Stretch, "dx");
+    let arrows = &rec.entities[&path].lengths;
+    assert!(
+        arrows.last().is_some_and(|&n| n > 0),
+        "no stretch corrections drawn after switching to full: {arrows:?}"
+    );
 }

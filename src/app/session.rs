@@ -226,8 +226,12 @@ fn new_run(loaded: &Loaded, name: &str, rec: rerun::RecordingStream) -> Result<R
     telemetry.forget();
     let mut run =
         Run::start(scene, telemetry, name, &loaded.resolved).map_err(|e| e.to_string())?;
-    // The panel's readouts need diagnostics whatever the telemetry level.
-    run.scene.solver_mut().set_diagnostics(true);
+    // The panel's readouts need diagnostics whatever the telemetry level,
+    // and the panel can switch to level full or colouring by correction at
+    // any step, so every particle's corrections are recorded too.
+    let solver = run.scene.solver_mut();
+    solver.set_diagnostics(true);
+    solver.record_corrections(true);
     Ok(run)
 }
 
