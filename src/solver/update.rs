@@ -115,19 +115,24 @@ pub(crate) fn integrate(
     let dt2 = dt * dt;
     let with_wind = env.air_density > 0.0 && (env.drag_normal > 0.0 || env.drag_tangent > 0.0);
     let mean = mean_displacement(state, inv_mass, reference.body_of);
+    // Each body's rigid motion over the last substep, `to ∘ from⁻¹`, once.
+    let motions: Vec<Pose> = reference
+        .from
+        .iter()
+        .zip(reference.to)
+        .map(|(from, to)| {
+            let rotation = (to.rotation * from.rotation.conjugate()).normalize();
+            Pose::new(to.translation - rotation * from.translation, rotation)
+        })
+        .collect();
     for i in 0..state.len() {
         let q = state.orientation[i];
-        let body = reference.body_of[i] as usize;
-        let carrier =
-            (body < reference.from.len()).then(|| (reference.from[body], reference.to[body]));
+        let carrier = motions.get(reference.body_of[i] as usize);
         if inv_mass[i] > 0.0 {
             let x = state.position[i];
             let prev = state.prev_position[i];
             let disp = x - prev;
-            let carried = match carrier {
-                Some((from, to)) => to.transform_point(from.inverse_transform_point(prev)) - prev,
-                None => mean,
-            };
+            let carried = carrier.map_or(mean, |m| m.transform_point(prev) - prev);
             let mut acc = env.gravity;
             if with_wind {
                 acc += wind_acceleration(env, areal_density, normal_of(q), disp / dt, dt);
@@ -136,9 +141,7 @@ pub(crate) fn integrate(
             state.position[i] = x + carried + (disp - carried) * damping + acc * dt2;
         }
         if inv_inertia[i] > 0.0 {
-            let carried = carrier.map_or(Quat::IDENTITY, |(from, to)| {
-                (to.rotation * from.rotation.conjugate()).normalize()
-            });
+            let carried = carrier.map_or(Quat::IDENTITY, |m| m.rotation);
             let mut relative = q * state.prev_orientation[i].conjugate() * carried.conjugate();
             if relative.w < 0.0 {
                 relative = -relative;
