@@ -9,7 +9,9 @@
 //! stream goes into a `re_log_channel` that the embedded viewer reads, so no
 //! server or network is involved.
 
+pub mod history;
 pub mod panel;
+pub mod preset_diff;
 pub mod session;
 
 use anyhow::Context;
@@ -53,7 +55,7 @@ pub fn run(preset: &str) -> anyhow::Result<()> {
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();
     let (tx, rx) = re_log_channel::log_channel(re_log_channel::LogSource::Sdk);
-    let session = Session::start(loaded, preset.to_string(), move |msg| {
+    let session = Session::start(loaded, preset.to_string(), move |msg: &rerun::log::LogMsg| {
         let _ = tx.send(msg.clone().into());
     })
     .map_err(anyhow::Error::msg)?;
