@@ -41,6 +41,14 @@ pub struct Recording {
     pub summary: Option<String>,
     /// Particle positions at the last logged frame.
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
+    /// The recording ids of the data (one for a file that holds one run).
+    pub recordings: BTreeSet<String>,
+    /// Whether the file carries a blueprint (a viewer layout).
+    pub blueprint: bool,
+    /// Recording properties as text, by `entity:component` under
+    /// `__properties` (`__properties:RecordingInfo:name`,
+    /// `__properties/weft:preset`…).
+    pub properties: BTreeMap<String, String>,
 }
 
 impl Recording {
@@ -80,8 +88,10 @@ pub fn read(path: &Path) -> Result<Recording, String> {
             continue;
         };
         if !store.is_recording() {
+            out.blueprint = true;
             continue;
         }
+        out.recordings.insert(store.recording_id().to_string());
         let chunk = Chunk::from_arrow_msg(&arrow)
             .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
         absorb(&mut out, &chunk);
@@ -141,6 +151,17 @@ fn absorb(out: &mut Recording, chunk: &Chunk) {
             })
             .collect()
     };
+    if path.starts_with("__properties") {
+        for (ident, _) in components.iter() {
+            let name = ident.as_str();
+            if name.contains("start_time") {
+                continue;
+            }
+            if let Some(text) = texts(*ident).pop() {
+                out.properties.insert(format!("{path}:{name}"), text);
+            }
+        }
+    }
     match path.as_str() {
         paths::PRESET => out.preset = texts(rerun::TextDocument::descriptor_text().component).pop(),
         paths::SUMMARY => {
