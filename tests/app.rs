@@ -652,3 +652,42 @@ fn colour_by_one_family() {
     let err = load::load("flag_on_car", &set("correction.twist")).unwrap_err();
     assert!(err.to_string().contains("correction.planarity"), "{err}");
 }
+
+/// A branch's plots show its parent's curves beside its own.
+#[test]
+fn a_branch_draws_its_parent_beside_it() {
+    type Rows = std::collections::BTreeMap<(String, String), usize>;
+    let rows = std::sync::Arc::new(std::sync::Mutex::new(Rows::new()));
+    let sink = rows.clone();
+    let loaded = load::load("hanging_sheet", &[]).unwrap();
+    let session = Session::start(
+        loaded,
+        "hanging_sheet".into(),
+        move |msg: &rerun::log::LogMsg| {
+            if let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg
+                && store.is_recording()
+            {
+                let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
+                let key = (
+                    store.recording_id().to_string(),
+                    chunk.entity_path().to_string(),
+                );
+                *sink.lock().unwrap().entry(key).or_default() += chunk.num_rows();
+            }
+        },
+    )
+    .unwrap();
+    for _ in 0..10 {
+        session.send(Command::Step);
+    }
+    assert!(session.wait_for(WAIT, |s| s.frame == 10));
+    session.send(Command::Branch(BranchAt::Frame(5)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let branch = session.status().run.recording_id;
+    drop(session);
+    let rows = rows.lock().unwrap();
+    let count = |path: &str| rows.get(&(branch.clone(), path.to_string())).copied();
+    // The series style (static) and the parent's ten frames.
+    assert_eq!(count("/metrics/strain/parent"), Some(11), "{rows:?}");
+    assert_eq!(count("/metrics/violation/curvature/parent"), Some(11));
+}

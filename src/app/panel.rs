@@ -322,8 +322,14 @@ impl Panel {
                 self.branch(session, status);
             }
             ui.label("at frame");
-            if self.branch_at.is_none() {
-                self.branch_frame = status.frame;
+            match self.branch_at {
+                None => self.branch_frame = status.frame,
+                // Shown as a frame; the session finds the exact one.
+                Some(BranchAt::Time(t)) => {
+                    let dt = status.preset.as_ref().map_or(1.0, |p| p.solver.dt) as f64;
+                    self.branch_frame = (t / dt).round() as u64;
+                }
+                Some(BranchAt::Frame(_)) => {}
             }
             if ui
                 .add(egui::DragValue::new(&mut self.branch_frame).range(0..=status.frame))

@@ -268,12 +268,20 @@ enum Start {
         snapshot: Box<Snapshot>,
         history: Box<History>,
         tuning: Tuning,
+        /// The parent's plotted values, drawn beside the branch's.
+        parent_series: Series,
     },
 }
+
+/// A run's plotted values per frame (from frame 1): simulated time, max
+/// strain, kinetic energy and each family's max violation (in
+/// [`Family::index`] order).
+pub type Series = Vec<(u64, f64, [f32; 6])>;
 
 struct Worker {
     run: Run,
     history: History,
+    series: Series,
     info: RunInfo,
     runs: Vec<RunInfo>,
     loaded: Loaded,
@@ -321,6 +329,7 @@ impl Worker {
         let worker = Self {
             run: opened.run,
             history: opened.history,
+            series: Series::new(),
             runs: vec![opened.info.clone()],
             info: opened.info,
             loaded,
@@ -472,15 +481,20 @@ impl Worker {
         match self.history.state_at(frame) {
             Ok(snapshot) => {
                 let history = self.history.branch(frame, tuning);
+                let parent_series = self.series.clone();
                 self.playing = false;
-                self.begin(
+                if self.begin(
                     Start::Branch {
                         snapshot: Box::new(snapshot),
                         history: Box::new(history),
                         tuning,
+                        parent_series,
                     },
                     None,
-                );
+                ) {
+                    // The two runs are the same up to the branch frame.
+                    self.series.retain(|(f, _, _)| *f <= frame);
+                }
             }
             Err(e) => self.set_error(Some(format!("cannot branch at frame {frame}: {e}"))),
         }
@@ -509,6 +523,9 @@ impl Worker {
             Ok(opened) => {
                 self.finish();
                 self.stop_recording();
+                if opened.info.parent.is_none() {
+                    self.series.clear();
+                }
                 self.tee = opened.tee;
                 let old = std::mem::replace(&mut self.rec, opened.rec);
                 let _ = old.flush_blocking();
@@ -572,6 +589,21 @@ impl Worker {
                 let run = &self.run;
                 self.history
                     .stepped(frame, run.scene.time(), || run.snapshot());
+                if let Some(d) = run.scene.solver().diagnostics() {
+                    let v = |f: Family| d.family(f).violation.max;
+                    self.series.push((
+                        frame,
+                        run.scene.time(),
+                        [
+                            d.max_strain,
+                            d.kinetic_energy,
+                            v(Family::Stretch),
+                            v(Family::Planarity),
+                            v(Family::Normality),
+                            v(Family::Curvature),
+                        ],
+                    ));
+                }
             }
             Err(e) => {
                 self.playing = false;
@@ -648,6 +680,7 @@ fn open(
     base: Option<Preset>,
     file: Option<FileSink>,
 ) -> Result<Opened, String> {
+    let mut parent_series = Series::new();
     let (scene, history, tuning, snapshot) = match start {
         Start::Fresh(loaded) => {
             let scene = Scene::new(&loaded.preset).map_err(|e| e.to_string())?;
@@ -657,7 +690,11 @@ fn open(
             snapshot,
             history,
             tuning,
-        } => (None, Some(*history), Some(tuning), Some(*snapshot)),
+            parent_series: series,
+        } => {
+            parent_series = series;
+            (None, Some(*history), Some(tuning), Some(*snapshot))
+        }
     };
     // What the run is, for its name: the preset with the tuning it runs.
     let mut current = match (&scene, &snapshot) {
@@ -730,6 +767,9 @@ fn open(
             .with_component::<rerun::components::Text>("parent_frame", [frame.to_string()]);
     }
     rec.send_property("weft", &props).map_err(|e| e.to_string())?;
+    if let Some((number, _, _)) = &info.parent {
+        log_parent_series(&rec, *number, &parent_series).map_err(|e| e.to_string())?;
+    }
     Ok(Opened {
         run,
         history,
@@ -737,6 +777,54 @@ fn open(
         rec,
         tee,
     })
+}
+
+/// Logs a parent run's plotted values into a branch's recording, beside the
+/// branch's own in the same plots: `metrics/strain/parent`,
+/// `metrics/energy/parent`, `metrics/violation/{family}/parent`, thin and
+/// grey, named after the parent run.
+fn log_parent_series(
+    rec: &rerun::RecordingStream,
+    parent: u32,
+    series: &Series,
+) -> rerun::RecordingStreamResult<()> {
+    use crate::telemetry::paths;
+    let frames: Vec<i64> = series.iter().map(|(f, _, _)| *f as i64).collect();
+    let times: Vec<f64> = series.iter().map(|(_, t, _)| *t).collect();
+    let mut plots = vec![
+        (paths::STRAIN.replace("/max", "/parent"), 0, "max".to_string()),
+        (
+            paths::ENERGY.replace("/kinetic", "/parent"),
+            1,
+            "kinetic".to_string(),
+        ),
+    ];
+    for f in Family::ALL {
+        plots.push((
+            paths::violation(f, "parent"),
+            2 + f.index(),
+            format!("{} max", f.name()),
+        ));
+    }
+    for (path, k, label) in plots {
+        rec.log_static(
+            path.as_str(),
+            &rerun::SeriesLines::new()
+                .with_colors([rerun::Color::from_rgb(150, 150, 150)])
+                .with_widths([0.75])
+                .with_names([format!("{label}, run #{parent}")]),
+        )?;
+        let values: Vec<f64> = series.iter().map(|(_, _, v)| v[k] as f64).collect();
+        rec.send_columns(
+            path.as_str(),
+            [
+                rerun::TimeColumn::new_sequence(paths::FRAME, frames.clone()),
+                rerun::TimeColumn::new_duration_secs(paths::SIM_TIME, times.clone()),
+            ],
+            rerun::Scalars::new(values).columns_of_unit_batches()?,
+        )?;
+    }
+    Ok(())
 }
 
 /// `ok`, or `FAIL: expect.max_strain, …` (empty without bounds).
