@@ -401,10 +401,11 @@ fn a_branch_is_bit_identical_up_to_its_frame() {
 
     // Past the run's last frame: refused, with the reason.
     session.send(Command::Branch(BranchAt::Frame(5000)));
-    assert!(session.wait_for(WAIT, |s| s
-        .error
-        .as_deref()
-        .is_some_and(|e| e.contains("cannot branch at frame 5000"))));
+    assert!(session.wait_for(WAIT, |s| {
+        s.error
+            .as_deref()
+            .is_some_and(|e| e.contains("cannot branch at frame 5000"))
+    }));
     assert_eq!(session.status().run.number, 4);
 }
 
@@ -516,7 +517,9 @@ fn the_inspector_shows_the_selected_particle() {
     let link = s.panel.link();
     let mut h = harness(s);
     h.run();
-    h.state().session.send(Command::StartRecording(file.clone()));
+    h.state()
+        .session
+        .send(Command::StartRecording(file.clone()));
     assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_some()));
     for _ in 0..5 {
         h.state().session.send(Command::Step);
@@ -528,11 +531,9 @@ fn the_inspector_shows_the_selected_particle() {
     let tip = weft_n - 1;
     link.lock().unwrap().select(status.run.recording_id, tip);
     h.run();
-    assert!(
-        h.state()
-            .session
-            .wait_for(WAIT, |s| s.particle.as_ref().is_some_and(|p| p.index == tip))
-    );
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.particle.as_ref().is_some_and(|p| p.index == tip)
+    }));
     h.run();
     let p = h.state().session.status().particle.unwrap();
     assert_eq!(p.cell, (tip as u32, 0));
@@ -628,7 +629,10 @@ fn colour_by_one_family() {
     use weft::scene::preset::ColorBy;
     let set = |v: &str| vec![format!("telemetry.color_by={v}").parse().unwrap()];
     let loaded = load::load("flag_on_car", &set("correction.planarity")).unwrap();
-    assert_eq!(loaded.preset.telemetry.color_by, ColorBy::CorrectionPlanarity);
+    assert_eq!(
+        loaded.preset.telemetry.color_by,
+        ColorBy::CorrectionPlanarity
+    );
     let mut scene = weft::scene::Scene::new(&loaded.preset).unwrap();
     scene.solver_mut().set_diagnostics(true);
     for _ in 0..10 {

@@ -31,7 +31,12 @@ fn the_window_shows_the_cloth_and_the_panel() {
     let out = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1600x1000x24"])
         .arg(env!("CARGO_BIN_EXE_weft"))
-        .args(["gui", "flag_on_car", "--set", "solver.weights.curvature=0.35"])
+        .args([
+            "gui",
+            "flag_on_car",
+            "--set",
+            "solver.weights.curvature=0.35",
+        ])
         .arg("--screenshot")
         .arg(&shot)
         .args(["--frames", "60"])
@@ -40,7 +45,10 @@ fn the_window_shows_the_cloth_and_the_panel() {
         .output()
         .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "weft gui --screenshot failed:\n{stderr}");
+    assert!(
+        out.status.success(),
+        "weft gui --screenshot failed:\n{stderr}"
+    );
     assert!(stderr.contains("saved the window"), "{stderr}");
     let img = image::open(&shot).unwrap().to_rgba8();
     assert_eq!((img.width(), img.height()), (1400, 860));

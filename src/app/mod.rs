@@ -197,9 +197,13 @@ pub fn run(
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();
     let (tx, rx) = re_log_channel::log_channel(re_log_channel::LogSource::Sdk);
-    let session = Session::start(loaded, preset.to_string(), move |msg: &rerun::log::LogMsg| {
-        let _ = tx.send(msg.clone().into());
-    })
+    let session = Session::start(
+        loaded,
+        preset.to_string(),
+        move |msg: &rerun::log::LogMsg| {
+            let _ = tx.send(msg.clone().into());
+        },
+    )
     .map_err(anyhow::Error::msg)?;
     let panel = Panel::new(&session.status());
     let link = panel.link();

@@ -262,7 +262,7 @@ impl Drop for Session {
 /// How a new run starts.
 enum Start {
     /// From frame 0 of this preset (the tuning already in it).
-    Fresh(Loaded),
+    Fresh(Box<Loaded>),
     /// From a frame of the current run.
     Branch {
         snapshot: Box<Snapshot>,
@@ -316,7 +316,7 @@ impl Worker {
         let base = load::load(&name, &[]).ok().map(|l| l.preset);
         let opened = open(
             &forward,
-            Start::Fresh(loaded.clone()),
+            Start::Fresh(Box::new(loaded.clone())),
             &name,
             RunInfo {
                 number: 1,
@@ -402,7 +402,7 @@ impl Worker {
             }
             Command::Reset => {
                 let loaded = self.current_loaded();
-                self.begin(Start::Fresh(loaded), None);
+                self.begin(Start::Fresh(Box::new(loaded)), None);
             }
             Command::Speed(s) => self.speed = s.clamp(0.01, 100.0),
             Command::Tune(t) => {
@@ -422,7 +422,7 @@ impl Worker {
             Command::Load(loaded, name) => {
                 self.name = name;
                 self.loaded = *loaded.clone();
-                self.begin(Start::Fresh(*loaded), None);
+                self.begin(Start::Fresh(loaded), None);
             }
             Command::StartRecording(path) => {
                 // A recording is a new run from frame 0 with the current
@@ -432,7 +432,7 @@ impl Worker {
                     Ok(file) => {
                         let loaded = self.current_loaded();
                         self.loaded = loaded.clone();
-                        if self.begin(Start::Fresh(loaded), Some(file)) {
+                        if self.begin(Start::Fresh(Box::new(loaded)), Some(file)) {
                             self.status.lock().expect("not poisoned").recording = Some(path);
                         }
                     }
@@ -565,10 +565,7 @@ impl Worker {
                         "final_state",
                         [figures.final_state.clone()],
                     )
-                    .with_component::<rerun::components::Text>(
-                        "verdict",
-                        [verdict_text(&checks)],
-                    ),
+                    .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
             );
         }
         let _ = self.rec.flush_blocking();
@@ -766,7 +763,8 @@ fn open(
             .with_component::<rerun::components::Text>("parent_run", [number.to_string()])
             .with_component::<rerun::components::Text>("parent_frame", [frame.to_string()]);
     }
-    rec.send_property("weft", &props).map_err(|e| e.to_string())?;
+    rec.send_property("weft", &props)
+        .map_err(|e| e.to_string())?;
     if let Some((number, _, _)) = &info.parent {
         log_parent_series(&rec, *number, &parent_series).map_err(|e| e.to_string())?;
     }
@@ -792,7 +790,11 @@ fn log_parent_series(
     let frames: Vec<i64> = series.iter().map(|(f, _, _)| *f as i64).collect();
     let times: Vec<f64> = series.iter().map(|(_, t, _)| *t).collect();
     let mut plots = vec![
-        (paths::STRAIN.replace("/max", "/parent"), 0, "max".to_string()),
+        (
+            paths::STRAIN.replace("/max", "/parent"),
+            0,
+            "max".to_string(),
+        ),
         (
             paths::ENERGY.replace("/kinetic", "/parent"),
             1,

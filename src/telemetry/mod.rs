@@ -84,8 +84,7 @@ impl Telemetry {
     /// Whether the solver's diagnostics must record every particle's
     /// corrections: for the arrows (level full) and for colouring by them.
     pub fn needs_corrections(&self) -> bool {
-        self.settings.level == Level::Full
-            || self.settings.color_by.uses_corrections()
+        self.settings.level == Level::Full || self.settings.color_by.uses_corrections()
     }
 
     /// Whether frame `frame` is logged.
@@ -434,10 +433,7 @@ impl Telemetry {
                 let fd = d.family(f);
                 let len = |v: &[Vec3]| v.iter().map(|v| v.length() as f64).collect::<Vec<_>>();
                 values = values
-                    .with_component::<rerun::components::Scalar>(
-                        DX_NAMES[f.index()],
-                        len(&fd.dx),
-                    )
+                    .with_component::<rerun::components::Scalar>(DX_NAMES[f.index()], len(&fd.dx))
                     .with_component::<rerun::components::Scalar>(
                         DTHETA_NAMES[f.index()],
                         len(&fd.dtheta),
