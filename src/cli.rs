@@ -146,6 +146,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             for p in &presets {
                 match load::load(p, &set) {
                     Ok(l) => {
+                        warn(&l);
                         let c = &l.preset.cloth;
                         println!(
                             "ok      {p}: {}×{} cloth, {} bodies, {} colliders",
@@ -169,6 +170,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Show { preset, set } => {
             let loaded = load::load(&preset, &set)?;
+            warn(&loaded);
             print!("{}", load::to_toml(&loaded.preset));
             Ok(ExitCode::SUCCESS)
         }
@@ -215,6 +217,7 @@ fn gui(_preset: &str) -> anyhow::Result<ExitCode> {
 
 fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     let loaded = load::load(&args.preset, &args.overrides())?;
+    warn(&loaded);
     let preset = &loaded.preset;
     let scene =
         Scene::new(preset).with_context(|| format!("building the scene of {}", args.preset))?;
@@ -286,6 +289,13 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Prints a loaded preset's warnings to standard error.
+fn warn(loaded: &load::Loaded) {
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
 }
 
 fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
