@@ -43,7 +43,7 @@ fn extend_reads_only_small_regular_files() {
         ("/dev/zero", "not a regular file"),
         ("huge.toml", "too large"),
         ("folder.toml", "is a directory"),
-        ("missing.toml", "cannot read"),
+        ("missing.toml", "cannot be read"),
     ];
     for (target, needle) in cases {
         std::fs::write(
@@ -85,7 +85,10 @@ fn extend_cycles_are_found_on_resolved_paths() {
     let msg = err.to_string();
     assert!(msg.contains("forms a cycle"), "{msg}");
     assert!(!msg.contains(".."), "untidy path in: {msg}");
-    assert!(msg.contains("x.toml → ") && msg.contains("y.toml → "), "{msg}");
+    assert!(
+        msg.contains("x.toml → ") && msg.contains("y.toml → "),
+        "{msg}"
+    );
     assert_eq!(err.position, Some((1, 1)), "{msg}");
     assert!(err.source.ends_with("y.toml"), "{msg}");
 }
@@ -123,7 +126,11 @@ fn long_names_are_compared_and_shown_within_bounds() {
 fn set_errors_are_blamed_on_the_set() {
     let cases: &[(&str, &str, &[&str])] = &[
         // An unknown key below a new table.
-        ("cloth.fabric.warp=3", "cloth.fabric", &["unknown key `fabric`"]),
+        (
+            "cloth.fabric.warp=3",
+            "cloth.fabric",
+            &["unknown key `fabric`"],
+        ),
         // The preset's `cloth.position` is the solver's `cloth.origin`.
         (
             "cloth.position=[1e7, 0, 0]",
@@ -181,7 +188,10 @@ fn non_utf8_files_get_a_position() {
     let err = load_path(&path, &[]).unwrap_err();
     let msg = err.to_string();
     assert_eq!(err.position, Some((3, 15)), "{msg}");
-    assert!(msg.contains("not UTF-8") && msg.contains("offset 40"), "{msg}");
+    assert!(
+        msg.contains("not UTF-8") && msg.contains("offset 40"),
+        "{msg}"
+    );
 }
 
 /// A grid far larger than the shipped ones loads, with a warning that
@@ -190,14 +200,22 @@ fn non_utf8_files_get_a_position() {
 fn large_grids_are_warned_about_with_an_estimate() {
     for p in weft::scene::shipped::ALL {
         let loaded = load::load(p.name, &[]).unwrap();
-        assert!(loaded.warnings.is_empty(), "{}: {:?}", p.name, loaded.warnings);
+        assert!(
+            loaded.warnings.is_empty(),
+            "{}: {:?}",
+            p.name,
+            loaded.warnings
+        );
     }
     let big = ["cloth.weft=512", "cloth.warp=512"];
     let loaded = load::load("hanging_sheet", &sets(&big)).unwrap();
     let [warning] = loaded.warnings.as_slice() else {
         panic!("{:?}", loaded.warnings)
     };
-    assert!(warning.contains("512 × 512") && warning.contains("per frame"), "{warning}");
+    assert!(
+        warning.contains("512 × 512") && warning.contains("per frame"),
+        "{warning}"
+    );
     assert!(warning.contains("min for the 10 s duration"), "{warning}");
 
     let out = Command::new(env!("CARGO_BIN_EXE_weft"))

@@ -74,12 +74,15 @@ impl ClothSpec {
         let size = Range::new(1e-3, 1e3).unit(" m");
         size.check("cloth.width", self.width)?;
         size.check("cloth.height", self.height)?;
-        let side = Range::new(MIN_RESOLUTION as f32, MAX_RESOLUTION as f32).of("particles per side");
+        let side =
+            Range::new(MIN_RESOLUTION as f32, MAX_RESOLUTION as f32).of("particles per side");
         side.check_count("cloth.weft", self.weft)?;
         side.check_count("cloth.warp", self.warp)?;
         let density = Range::new(1e-4, 1e3).unit(" kg/m²");
         density.check("cloth.density", self.density)?;
-        Range::new(0.0, 0.1).unit(" m").check("cloth.thickness", self.thickness)?;
+        Range::new(0.0, 0.1)
+            .unit(" m")
+            .check("cloth.thickness", self.thickness)?;
         let imperfection = Range::new(0.0, 0.01).unit(" m");
         imperfection.check("cloth.imperfection", self.imperfection)?;
         Range::components(1e6).check_each("cloth.origin", &self.origin.to_array())?;

@@ -339,7 +339,11 @@ impl Range {
     }
 
     fn contains(&self, v: f32) -> bool {
-        let above = if self.lo_open { v > self.lo } else { v >= self.lo };
+        let above = if self.lo_open {
+            v > self.lo
+        } else {
+            v >= self.lo
+        };
         above && v <= self.hi
     }
 
@@ -385,7 +389,9 @@ const WEIGHT: Range = Range::new(0.0, 1.0).of("λ");
 impl Params {
     /// Checks every parameter against its range; the first violation is returned.
     pub fn validate(&self) -> Result<(), RangeError> {
-        Range::new(0.0, 1.0).of("k").check("damping", self.damping)?;
+        Range::new(0.0, 1.0)
+            .of("k")
+            .check("damping", self.damping)?;
         let w = &self.weights;
         WEIGHT.check("weights.stretch", w.stretch)?;
         WEIGHT.check("weights.planarity", w.planarity)?;
@@ -399,7 +405,10 @@ impl Params {
                 .check("h", h)?;
         }
         Range::new(1.0, 200.0).check_count("iterations", self.iterations)?;
-        Range::above(0.0, 0.1).of("Δt").unit(" s").check("dt", self.dt)?;
+        Range::above(0.0, 0.1)
+            .of("Δt")
+            .unit(" s")
+            .check("dt", self.dt)?;
         Range::new(1.0, 64.0).check_count("substeps", self.substeps)?;
         Ok(())
     }

@@ -104,14 +104,22 @@ pub(super) fn report(
                 ..PresetError::plain(set_source(o), message)
             };
         }
-        Failure::At { key: None, message, hint } => {
+        Failure::At {
+            key: None,
+            message,
+            hint,
+        } => {
             return PresetError {
                 hint,
                 position: (!sources.is_empty()).then_some((1, 1)),
                 ..PresetError::plain(first, message)
             };
         }
-        Failure::At { key: Some(key), message, hint } => (key, message, hint),
+        Failure::At {
+            key: Some(key),
+            message,
+            hint,
+        } => (key, message, hint),
     };
     let base = PresetError {
         key: Some(key.clone()),
@@ -178,7 +186,11 @@ pub(super) fn explain(message: &str) -> (String, Option<String>) {
         && let Some((value, rest)) = rest.split_once('`')
     {
         let valid = expected(rest);
-        let text = format!("unknown value `{}`; allowed: {}", clip(value), valid.join(", "));
+        let text = format!(
+            "unknown value `{}`; allowed: {}",
+            clip(value),
+            valid.join(", ")
+        );
         return (text, hint(value, &valid));
     }
     if let Some(rest) = message.strip_prefix("missing field `")

@@ -115,7 +115,11 @@ fn blame<'a>(base: &Table, overrides: &'a [Override], failure: &Failure) -> Opti
         Failure::At { key: None, .. } => return None,
         Failure::At { key: Some(key), .. } => key,
     };
-    if let Some(o) = overrides.iter().rev().find(|o| overrides::is_within(key, &o.key)) {
+    if let Some(o) = overrides
+        .iter()
+        .rev()
+        .find(|o| overrides::is_within(key, &o.key))
+    {
         return Some(o);
     }
     if !overrides.iter().any(|o| overrides::is_within(&o.key, key)) {

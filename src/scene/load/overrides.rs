@@ -3,6 +3,8 @@
 
 use toml::{Table, Value};
 
+use crate::scene::preset::clip;
+
 /// A `--set key.path=value` override.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Override {
@@ -18,11 +20,12 @@ impl std::str::FromStr for Override {
     fn from_str(s: &str) -> Result<Self, String> {
         let (key, raw) = s
             .split_once('=')
-            .ok_or_else(|| format!("`{s}` is not of the form key.path=value"))?;
+            .ok_or_else(|| format!("`{}` is not of the form key.path=value", clip(s)))?;
         let key = key.trim();
         if key.is_empty() || parse_path(key).is_none() {
             return Err(format!(
-                "`{key}` is not a key path like `solver.weights.curvature` or `bodies[0].car.heading`"
+                "`{}` is not a key path like `solver.weights.curvature` or `bodies[0].car.heading`",
+                clip(key)
             ));
         }
         let raw = raw.trim();
@@ -98,7 +101,7 @@ fn set_in(here: &mut Value, path: &[Segment], depth: usize, new: &Value) -> Resu
         *here = new.clone();
         return Ok(());
     };
-    let walked = || join(&path[..depth]);
+    let walked = || clip(&join(&path[..depth])).into_owned();
     match seg {
         Segment::Key(k) => {
             let Value::Table(t) = here else {

@@ -74,27 +74,29 @@ impl Origin {
         }
     }
 
-    /// Reads the text. An unreadable file gives `Err(Ok(why))`, for the
-    /// caller to locate (at the `extend` that named it, if one did); text
-    /// that is not UTF-8 gives `Err(Err(error))`, located in the file itself.
-    fn read(&self) -> Result<String, Result<String, PresetError>> {
+    /// Reads the text, refusing anything but a regular file of at most
+    /// [`MAX_FILE_BYTES`] before reading it.
+    fn read(&self) -> Result<String, ReadError> {
         let path = match self {
             Origin::File(p) => p,
             Origin::Shipped(name) => {
                 return Ok(shipped::find(name).expect("resolved").text.to_string());
             }
         };
-        let meta = std::fs::metadata(path).map_err(|e| Ok(format!("cannot read: {e}")))?;
+        let meta = std::fs::metadata(path)
+            .map_err(|e| ReadError::Refused(format!("cannot be read: {e}")))?;
         if meta.is_dir() {
-            return Err(Ok("is a directory, not a preset file".into()));
+            return Err(ReadError::Refused(
+                "is a directory, not a preset file".into(),
+            ));
         }
         if !meta.is_file() {
-            return Err(Ok(
+            return Err(ReadError::Refused(
                 "is not a regular file (a device, pipe or socket); a preset is a TOML file".into(),
             ));
         }
         let too_large = |size: u64| {
-            Ok(format!(
+            ReadError::Refused(format!(
                 "is too large for a preset ({size} bytes; at most {MAX_FILE_BYTES})"
             ))
         };
@@ -104,14 +106,14 @@ impl Origin {
         let mut bytes = Vec::new();
         std::fs::File::open(path)
             .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes))
-            .map_err(|e| Ok(format!("cannot read: {e}")))?;
+            .map_err(|e| ReadError::Refused(format!("cannot be read: {e}")))?;
         if bytes.len() as u64 > MAX_FILE_BYTES {
             return Err(too_large(bytes.len() as u64));
         }
         String::from_utf8(bytes).map_err(|e| {
             let at = e.utf8_error().valid_up_to();
             let valid = std::str::from_utf8(&e.as_bytes()[..at]).expect("valid up to here");
-            Err(PresetError {
+            ReadError::NotText(PresetError {
                 position: Some(line_col(valid, at)),
                 ..PresetError::plain(
                     self.label(),
@@ -130,6 +132,15 @@ impl Origin {
             _ => Origin::resolve(target),
         }
     }
+}
+
+/// Why a source could not be read.
+enum ReadError {
+    /// Missing, not a regular file, or too large: reported where it was
+    /// named (the `extend` line, or the command line).
+    Refused(String),
+    /// Not UTF-8: reported in the file itself, at the first bad byte.
+    NotText(PresetError),
 }
 
 /// `path` without `.` segments and with each `name/..` pair removed.
@@ -157,8 +168,8 @@ fn tidy(path: &Path) -> PathBuf {
 pub(super) fn read_chain(origin: &Origin, sources: &mut Vec<Source>) -> Result<Table, PresetError> {
     let text = match origin.read() {
         Ok(text) => text,
-        Err(Ok(why)) => return Err(PresetError::plain(origin.label(), why)),
-        Err(Err(e)) => return Err(e),
+        Err(ReadError::Refused(why)) => return Err(PresetError::plain(origin.label(), why)),
+        Err(ReadError::NotText(e)) => return Err(e),
     };
     read_from(origin, text, &mut vec![origin.identity()], sources)
 }
@@ -206,8 +217,10 @@ fn read_from(
             }
             let base_text = match base.read() {
                 Ok(text) => text,
-                Err(Ok(why)) => return Err(at_extend(format!("`{}` {why}", base.label()))),
-                Err(Err(e)) => return Err(e),
+                Err(ReadError::Refused(why)) => {
+                    return Err(at_extend(format!("`{}` {why}", base.label())));
+                }
+                Err(ReadError::NotText(e)) => return Err(e),
             };
             Some((base, base_text, id))
         }

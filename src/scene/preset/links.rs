@@ -111,4 +111,3 @@ pub struct ColliderSection {
 fn default_friction() -> f32 {
     0.5
 }
-

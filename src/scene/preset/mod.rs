@@ -7,6 +7,7 @@
 //! CI bounds in [`expect`]. [`Preset::validate`] (in [`validate`]) checks
 //! ranges and references and reports the dotted key of the first problem;
 //! `scene::load` turns that key into a file, line and column.
+//! [`Preset::warnings`] (in [`warnings`]) flags what is valid but costly.
 
 use glam::{EulerRot, Quat, Vec3};
 use serde::{Deserialize, Serialize};
@@ -18,6 +19,7 @@ pub mod expect;
 pub mod links;
 pub mod telemetry;
 pub mod validate;
+pub mod warnings;
 
 pub use bodies::{
     BodySection, Bump, CarMotion, Interpolation, Key, KeyframeMotion, RoadSection, Rough,
@@ -181,4 +183,3 @@ pub struct WindSection {
     /// Peak swing of the wind's direction, in degrees (about the vertical).
     pub sway: f32,
 }
-

@@ -4,8 +4,7 @@
 //! dotted key it is about and what is wrong. Range checks go through the
 //! solver's [`Range`], so a preset, `--set` and the panel write the same
 //! `value … is out of range; allowed: …` text from the same numbers.
-//! [`Preset::warnings`] flags what is valid but probably not meant, such as a
-//! grid whose first frame takes minutes. Names echoed in messages are
+//! Names echoed in messages are
 //! [`clip`]ped, and "did you mean" ([`nearest`]) skips absurdly long names.
 
 use std::{borrow::Cow, collections::HashSet};
@@ -34,7 +33,10 @@ impl Invalid {
 impl From<RangeError> for Invalid {
     fn from(e: RangeError) -> Self {
         let message = e.detail();
-        Self { key: e.key, message }
+        Self {
+            key: e.key,
+            message,
+        }
     }
 }
 
@@ -176,7 +178,9 @@ impl Preset {
                 Range::new(1e-4, 1e3).unit(" m").check(key("radius"), r)?;
             }
             if let Some(h) = col.half_length {
-                Range::new(0.0, 1e3).unit(" m").check(key("half_length"), h)?;
+                Range::new(0.0, 1e3)
+                    .unit(" m")
+                    .check(key("half_length"), h)?;
             }
             if let Some(h) = col.half_extents {
                 let extents = Range::components(1e3).unit(" m");
@@ -190,53 +194,6 @@ impl Preset {
             }
         }
         Ok(())
-    }
-}
-
-/// Rough cost of one particle through one substep's update, or through one
-/// sweep of every family, in seconds: measured at 512 × 512 (`weft record
-/// hanging_sheet --set cloth.weft=512 --set cloth.warp=512`, this machine's
-/// 2 cores, dev profile), rounded up.
-const SECONDS_PER_PARTICLE_PASS: f64 = 5e-7;
-/// A frame estimated to take longer than this gets a warning, in seconds
-/// (the shipped presets take milliseconds).
-const SLOW_FRAME: f64 = 0.5;
-
-impl Preset {
-    /// What is valid but probably not meant: a grid so large that each frame
-    /// takes seconds, with an estimate of the cost.
-    pub fn warnings(&self) -> Vec<String> {
-        let (c, s) = (&self.cloth, &self.solver);
-        let particles = c.weft as f64 * c.warp as f64;
-        let passes = s.substeps as f64 * (1.0 + s.iterations as f64);
-        let frame = particles * passes * SECONDS_PER_PARTICLE_PASS;
-        if frame < SLOW_FRAME {
-            return Vec::new();
-        }
-        let frames = (self.duration as f64 / s.dt as f64).ceil();
-        vec![format!(
-            "a {} × {} cloth ({particles} particles) with {} substeps × {} iterations is far larger than the shipped presets (at most 32 × 32): expect roughly {} per frame, the first one included, and {} for the {} s duration",
-            c.weft,
-            c.warp,
-            s.substeps,
-            s.iterations,
-            seconds(frame),
-            seconds(frame * frames),
-            self.duration,
-        )]
-    }
-}
-
-/// A duration for a person: `0.8 s`, `40 s`, `12 min`, `3.5 h`.
-fn seconds(t: f64) -> String {
-    if t < 10.0 {
-        format!("{t:.1} s")
-    } else if t < 120.0 {
-        format!("{t:.0} s")
-    } else if t < 7200.0 {
-        format!("{:.0} min", t / 60.0)
-    } else {
-        format!("{:.1} h", t / 3600.0)
     }
 }
 
@@ -299,7 +256,9 @@ fn validate_body(at: &str, body: &BodySection) -> Result<(), Invalid> {
         keyframes_ok(key("car.yaw_rate"), &m.yaw_rate, yaw_rate)?;
         let wheelbase = Range::new(0.1, 20.0).unit(" m");
         wheelbase.check(key("car.wheelbase"), m.wheelbase)?;
-        Range::new(0.1, 10.0).unit(" m").check(key("car.track"), m.track)?;
+        Range::new(0.1, 10.0)
+            .unit(" m")
+            .check(key("car.track"), m.track)?;
         for (k, bump) in m.road.bumps.iter().enumerate() {
             let key = |f: &str| key(&format!("car.road.bumps[{k}].{f}"));
             ROAD.check(key("at"), bump.at)?;
@@ -325,8 +284,12 @@ fn validate_body(at: &str, body: &BodySection) -> Result<(), Invalid> {
         speed.check(key("runner.speed"), m.speed)?;
         let stride = Range::new(0.0, 5.0).unit(" Hz");
         stride.check(key("runner.stride_frequency"), m.stride_frequency)?;
-        Range::new(0.0, 0.5).unit(" m").check(key("runner.bob"), m.bob)?;
-        Range::new(-45.0, 45.0).unit("°").check(key("runner.lean"), m.lean)?;
+        Range::new(0.0, 0.5)
+            .unit(" m")
+            .check(key("runner.bob"), m.bob)?;
+        Range::new(-45.0, 45.0)
+            .unit("°")
+            .check(key("runner.lean"), m.lean)?;
         let turn_time = Range::new(0.01, 10.0).unit(" s");
         turn_time.check(key("runner.turn_time"), m.turn_time)?;
         let turns = Range::new(-360.0, 360.0).unit("°");
