@@ -383,20 +383,16 @@ impl Range {
     }
 }
 
-/// The range of every constraint weight.
-const WEIGHT: Range = Range::new(0.0, 1.0).of("λ");
-
 impl Params {
     /// Checks every parameter against its range; the first violation is returned.
     pub fn validate(&self) -> Result<(), RangeError> {
         Range::new(0.0, 1.0)
             .of("k")
             .check("damping", self.damping)?;
-        let w = &self.weights;
-        WEIGHT.check("weights.stretch", w.stretch)?;
-        WEIGHT.check("weights.planarity", w.planarity)?;
-        WEIGHT.check("weights.normality", w.normality)?;
-        WEIGHT.check("weights.curvature", w.curvature)?;
+        for f in Family::ALL {
+            let weight = Range::new(0.0, 1.0).of("λ");
+            weight.check(format!("weights.{}", f.name()), self.weights.get(f))?;
+        }
         let phi = Range::new(0.0, std::f32::consts::PI).of("Φ").unit(" rad");
         phi.check("phi", self.phi)?;
         if let Width::Fixed(h) = self.h {

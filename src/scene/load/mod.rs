@@ -26,6 +26,8 @@ pub use locate::PresetError;
 pub use overrides::Override;
 pub use source::{MAX_FILE_BYTES, Origin};
 
+pub use crate::scene::preset::nearest;
+
 use locate::{Failure, Source};
 
 /// A preset together with the resolved TOML it was built from.
