@@ -231,10 +231,7 @@ fn read_from(
             )));
         }
     };
-    sources.push(Source {
-        name,
-        text: text.clone(),
-    });
+    sources.push(Source { name, text });
     let Some((base, base_text, id)) = base else {
         return Ok(table);
     };
