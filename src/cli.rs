@@ -175,6 +175,12 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Record(args) => record(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
+            if r.truncated {
+                println!(
+                    "{}: the file is cut short; compared what it holds",
+                    file.display()
+                );
+            }
             let stored = r
                 .recorded_digest
                 .as_deref()
