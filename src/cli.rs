@@ -248,11 +248,13 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     // cleanly; a second one quits at once.
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let _ = ctrlc::set_handler(move || {
+    if let Err(e) = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::Relaxed) {
             std::process::exit(130);
         }
-    });
+    }) {
+        eprintln!("warning: Ctrl-C will end the run without closing the file cleanly ({e})");
+    }
 
     let bar = indicatif::ProgressBar::new(frames).with_style(
         indicatif::ProgressStyle::with_template(
