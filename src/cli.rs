@@ -177,6 +177,12 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Record(args) => record(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
+            if r.truncated {
+                println!(
+                    "{}: the file is cut short; compared what it holds",
+                    file.display()
+                );
+            }
             let stored = r
                 .recorded_digest
                 .as_deref()
@@ -245,11 +251,13 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     // cleanly; a second one quits at once.
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let _ = ctrlc::set_handler(move || {
+    if let Err(e) = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::Relaxed) {
             std::process::exit(130);
         }
-    });
+    }) {
+        eprintln!("warning: Ctrl-C will end the run without closing the file cleanly ({e})");
+    }
 
     let bar = indicatif::ProgressBar::new(frames).with_style(
         indicatif::ProgressStyle::with_template(
