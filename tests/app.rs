@@ -304,16 +304,20 @@ fn each_run_is_its_own_recording() {
     // The viewer got all four recordings.
     assert_eq!(seen.lock().unwrap().len(), 4);
 
-    let rec = read::read(&file).unwrap();
-    assert_eq!(
-        rec.recordings.iter().collect::<Vec<_>>(),
-        vec![&recorded.recording_id],
-        "one run per file"
-    );
+    let all = read::read_all(&file).unwrap();
+    assert_eq!(all.len(), 1, "one run per file");
+    let rec = all.into_iter().next().unwrap();
+    assert_eq!(rec.id, recorded.recording_id);
+    assert!(!rec.truncated);
     assert!(rec.blueprint, "the file carries weft's blueprint");
     assert_eq!(rec.frames(paths::PARTICLES), vec![0, 1, 2, 3]);
     let prop = |k: &str| rec.properties.get(k).cloned().unwrap_or_default();
-    assert_eq!(prop("__properties:RecordingInfo:name"), recorded.name);
+    assert_eq!(
+        prop("__properties:RecordingInfo:name"),
+        recorded.name,
+        "{:?}",
+        rec.properties
+    );
     assert_eq!(prop("__properties/weft:preset"), "hanging_sheet");
     assert_eq!(prop("__properties/weft:version"), env!("CARGO_PKG_VERSION"));
     assert_eq!(prop("__properties/weft:changes"), "curvature 0.1→0.35");

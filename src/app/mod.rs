@@ -193,6 +193,9 @@ pub fn run(
     screenshot: Option<Screenshot>,
 ) -> anyhow::Result<()> {
     let loaded = load::load(preset, overrides)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();

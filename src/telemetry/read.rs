@@ -1,13 +1,29 @@
-//! Reading a recording back: entity paths, frames, array lengths, and the
-//! texts weft stores (preset, parameters, summary, events).
+//! Reading recordings back: each recording in a `.rrd` file on its own (by
+//! its store id), with its entities, frames, array lengths, and the texts
+//! weft stores (preset, parameters, summary, events).
 //!
-//! Used by `weft replay` and by tests, with Rerun's own decoder.
+//! Used by `weft replay` and by tests. The file is decoded with Rerun's
+//! decoder into one chunk store per recording, and every question is a query
+//! of Rerun's dataframe API (`rerun::dataframe`): which columns an entity
+//! has (its schema), and its rows on the `frame` timeline. Texts are read on
+//! the SDK's `log_time` timeline, which stamps every log call, so that two
+//! events logged at the same frame both come back (a query on `frame` keeps
+//! only the latest row per frame).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
+use rerun::dataframe::{
+    ChunkStoreConfig, ChunkStoreHandle, EntityPath, EntityPathFilter, QueryEngine, QueryExpression,
+    StorageEngine, StoreKind, TimelineName, ViewContentsSelector,
+    external::re_chunk_store::{ChunkStore, ColumnDescriptor, StaticColumnSelection},
+};
+use rerun::external::arrow::{
+    array::{Array, ArrayRef, AsArray as _, ListArray},
+    compute::cast,
+    datatypes::{DataType, Float32Type, Int64Type},
+};
 use rerun::external::re_log_encoding::DecoderApp;
-use rerun::log::{Chunk, LogMsg};
 
 use super::paths;
 
@@ -26,9 +42,14 @@ pub struct EntityInfo {
     pub lengths: Vec<usize>,
 }
 
-/// The contents of a recording, as weft wrote them.
+/// The contents of one recording, as weft wrote them.
 #[derive(Clone, Debug, Default)]
 pub struct Recording {
+    /// The recording id (one per run).
+    pub id: String,
+    /// Whether the file ended inside this recording's data (a crash or a
+    /// copy cut short): what is here is everything up to the cut.
+    pub truncated: bool,
     /// Every entity, by path (without the leading `/`).
     pub entities: BTreeMap<String, EntityInfo>,
     /// The resolved preset.
@@ -41,11 +62,9 @@ pub struct Recording {
     pub summary: Option<String>,
     /// Particle positions at the last logged frame.
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
-    /// The recording ids of the data (one for a file that holds one run).
-    pub recordings: BTreeSet<String>,
     /// Whether the file carries a blueprint (a viewer layout).
     pub blueprint: bool,
-    /// Recording properties as text, by `entity:component` under
+    /// The recording's properties as text, by `entity:component` under
     /// `__properties` (`__properties:RecordingInfo:name`,
     /// `__properties/weft:preset`…).
     pub properties: BTreeMap<String, String>,
@@ -61,8 +80,8 @@ impl Recording {
     }
 }
 
-/// The main array of a chunk's rows: the first component whose name is one
-/// of these, else the first component.
+/// The main array of an entity's rows: the first component whose name ends
+/// in one of these, else its first component.
 const MAIN: [&str; 5] = [
     ":positions",
     ":vectors",
@@ -71,129 +90,320 @@ const MAIN: [&str; 5] = [
     ":text",
 ];
 
-/// Reads a `.rrd` file. A file cut short (by a crash) reads up to its last
-/// complete message.
+/// The SDK's own timeline: when each log call was made.
+const LOG_TIME: &str = "log_time";
+
+/// Reads the one recording in a `.rrd` file. A file cut short (by a crash)
+/// reads up to its last complete message. A file holding several
+/// recordings is an error that says how many (use [`read_all`]).
 pub fn read(path: &Path) -> Result<Recording, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
-        .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
-    let mut out = Recording::default();
-    for msg in decoder {
-        let msg = match msg {
-            Ok(m) => m,
-            // A truncated tail: keep what was read.
-            Err(_) => break,
-        };
-        let LogMsg::ArrowMsg(store, arrow) = msg else {
-            continue;
-        };
-        if !store.is_recording() {
-            out.blueprint = true;
-            continue;
-        }
-        out.recordings.insert(store.recording_id().to_string());
-        let chunk = Chunk::from_arrow_msg(&arrow)
-            .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
-        absorb(&mut out, &chunk);
+    let mut all = read_all(path)?;
+    match all.len() {
+        0 => Err(format!("{}: holds no recording", path.display())),
+        1 => Ok(all.remove(0)),
+        n => Err(format!(
+            "{}: holds {n} recordings ({}); weft expects one run per file",
+            path.display(),
+            all.iter()
+                .map(|r| r.id.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
     }
-    Ok(out)
 }
 
-fn absorb(out: &mut Recording, chunk: &Chunk) {
-    let path = chunk
-        .entity_path()
-        .to_string()
-        .trim_start_matches('/')
-        .to_string();
-    let rows = chunk.num_rows();
-    let frames: Vec<i64> = chunk
-        .timelines()
-        .get(&paths::FRAME.into())
-        .map(|c| c.times_raw().to_vec())
-        .unwrap_or_else(|| vec![-1; rows]);
-    let info = out.entities.entry(path.clone()).or_default();
-    info.is_static |= chunk.is_static();
-    info.frames.extend(frames.iter().filter(|f| **f >= 0));
-    if let Some(c) = chunk.timelines().get(&paths::SIM_TIME.into()) {
-        info.sim_times.extend(c.times_raw().iter().copied());
-    }
-    let components = chunk.components();
-    let mut main = None;
-    for (ident, col) in components.iter() {
-        let name = ident.as_str().to_string();
-        let preferred = MAIN.iter().any(|m| name.ends_with(m));
-        if main.is_none() || preferred {
-            main = Some(col);
-        }
-        info.components.insert(name);
-        if preferred {
+/// Reads every recording in a `.rrd` file, in the order they start in it
+/// (blueprints are skipped).
+pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let size = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let mut decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
+        .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
+    let mut messages = Vec::new();
+    let mut order = Vec::new();
+    let mut failed = false;
+    let mut blueprint = false;
+    for msg in decoder.by_ref() {
+        let Ok(msg) = msg else {
+            failed = true;
             break;
+        };
+        let id = msg.store_id().clone();
+        blueprint |= id.kind() == StoreKind::Blueprint;
+        if id.kind() == StoreKind::Recording {
+            if !order.contains(&id) {
+                order.push(id);
+            }
+            messages.push(msg);
         }
     }
-    if let Some(col) = main.filter(|_| !chunk.is_static()) {
-        use rerun::external::arrow::array::Array as _;
-        let offsets = col.list_array.offsets();
-        for r in 0..col.list_array.len() {
-            info.lengths.push((offsets[r + 1] - offsets[r]) as usize);
-        }
-    }
-    for (ident, _) in components.iter() {
-        info.components.insert(ident.as_str().to_string());
-    }
+    // Cut short: a message that does not decode, bytes left over that make
+    // no whole message, or no footer (a stream is closed by its footer).
+    let truncated = failed
+        || decoder.num_bytes_processed() < size
+        || decoder.rrd_manifests().map_or(true, |m| m.is_empty());
+    let last = order.last().cloned();
+    let mut stores = ChunkStore::from_log_msgs(&ChunkStoreConfig::ALL_DISABLED, messages)
+        .map_err(|e| format!("{}: bad recording: {e}", path.display()))?;
+    order
+        .into_iter()
+        .filter_map(|id| {
+            let store = stores.remove(&id)?;
+            let engine = QueryEngine::from_store(ChunkStoreHandle::new(store));
+            let mut rec = recording(&engine);
+            rec.id = id.recording_id().to_string();
+            rec.truncated = truncated && Some(&id) == last.as_ref();
+            rec.blueprint = blueprint;
+            Some(Ok(rec))
+        })
+        .collect()
+}
 
-    let texts = |descriptor: rerun::ComponentIdentifier| -> Vec<String> {
-        chunk
-            .iter_component::<rerun::components::Text>(descriptor)
-            .map(|row| {
-                row.first()
-                    .map(|t| t.as_str().to_string())
-                    .unwrap_or_default()
-            })
-            .collect()
+/// Everything weft reads from one recording's store.
+fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
+    let mut out = Recording::default();
+    for entity in
+        engine.iter_entity_paths_sorted(&EntityPathFilter::parse_forgiving("+ /__properties/**"))
+    {
+        let path = entity.to_string().trim_start_matches('/').to_string();
+        properties(engine, &entity, &path, &mut out.properties);
+    }
+    for entity in engine.iter_entity_paths_sorted(&EntityPathFilter::all()) {
+        let path = entity.to_string().trim_start_matches('/').to_string();
+        if path.starts_with("__") {
+            continue; // the SDK's own
+        }
+        let info = entity_info(engine, &entity);
+        match path.as_str() {
+            paths::PRESET => out.preset = texts(engine, &entity, &info).pop().map(|(_, t)| t),
+            paths::SUMMARY => out.summary = texts(engine, &entity, &info).pop().map(|(_, t)| t),
+            paths::PARAMS => out.params = texts(engine, &entity, &info),
+            paths::EVENTS => out.events = texts(engine, &entity, &info),
+            paths::PARTICLES => out.last_positions = last_positions(engine, &entity, &info),
+            _ => {}
+        }
+        out.entities.insert(path, info);
+    }
+    out
+}
+
+/// An entity's columns, and its rows on the `frame` timeline.
+/// The text-valued recording properties of `entity` (the start time, a
+/// timestamp, is left out).
+fn properties(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    path: &str,
+    out: &mut BTreeMap<String, String>,
+) {
+    let schema = engine.schema_for_query(&contents(entity));
+    for c in &schema.components {
+        let name = c.component.as_str();
+        let text = static_value(engine, entity, name).and_then(|list| {
+            let value = list.value(0);
+            let s = value.as_string_opt::<i32>()?;
+            (!s.is_empty()).then(|| s.value(0).to_string())
+        });
+        if let Some(text) = text {
+            out.insert(format!("{path}:{name}"), text);
+        }
+    }
+}
+
+fn entity_info(engine: &QueryEngine<StorageEngine>, entity: &EntityPath) -> EntityInfo {
+    let mut info = EntityInfo::default();
+    let schema = engine.schema_for_query(&contents(entity));
+    for c in &schema.components {
+        info.is_static |= c.is_static;
+        info.components.insert(c.component.as_str().to_string());
+    }
+    let Some(main) = main_component(&info) else {
+        return info;
     };
-    if path.starts_with("__properties") {
-        for (ident, _) in components.iter() {
-            let name = ident.as_str();
-            if name.contains("start_time") {
-                continue;
-            }
-            if let Some(text) = texts(*ident).pop() {
-                out.properties.insert(format!("{path}:{name}"), text);
-            }
+    let temporal = schema
+        .components
+        .iter()
+        .any(|c| !c.is_static && c.component.as_str() == main);
+    for row in rows(engine, entity, paths::FRAME, &[paths::SIM_TIME], &main) {
+        info.frames.insert(row.index);
+        if let Some(t) = row.times[0] {
+            info.sim_times.insert(t);
+        }
+        if temporal && let Some(list) = &row.value {
+            info.lengths.push(list.value_length(0) as usize);
         }
     }
-    match path.as_str() {
-        paths::PRESET => out.preset = texts(rerun::TextDocument::descriptor_text().component).pop(),
-        paths::SUMMARY => {
-            out.summary = texts(rerun::TextDocument::descriptor_text().component).pop()
-        }
-        paths::PARAMS => out.params.extend(
-            frames
-                .iter()
-                .copied()
-                .zip(texts(rerun::TextDocument::descriptor_text().component)),
-        ),
-        paths::EVENTS => out.events.extend(
-            frames
-                .iter()
-                .copied()
-                .zip(texts(rerun::TextLog::descriptor_text().component)),
-        ),
-        paths::PARTICLES => {
-            let positions = chunk.iter_component::<rerun::components::Position3D>(
-                rerun::Points3D::descriptor_positions().component,
-            );
-            for (frame, row) in frames.iter().zip(positions) {
-                if out
-                    .last_positions
-                    .as_ref()
-                    .is_none_or(|(f, _)| *frame >= *f)
-                {
-                    out.last_positions =
-                        Some((*frame, row.iter().map(|p| [p.x(), p.y(), p.z()]).collect()));
-                }
-            }
-        }
-        _ => {}
+    info
+}
+
+fn main_component(info: &EntityInfo) -> Option<String> {
+    info.components
+        .iter()
+        .find(|c| MAIN.iter().any(|m| c.ends_with(m)))
+        .or_else(|| info.components.first())
+        .cloned()
+}
+
+/// The texts of a text entity (static, then by frame in logging order).
+fn texts(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    info: &EntityInfo,
+) -> Vec<(i64, String)> {
+    let Some(main) = main_component(info) else {
+        return Vec::new();
+    };
+    let text_of = |list: &ListArray| {
+        let value = list.value(0);
+        value
+            .as_string_opt::<i32>()
+            .filter(|s| !s.is_empty())
+            .map(|s| s.value(0).to_string())
+    };
+    let mut out: Vec<(i64, String)> = static_value(engine, entity, &main)
+        .and_then(|l| text_of(&l))
+        .map(|t| (-1, t))
+        .into_iter()
+        .collect();
+    out.extend(
+        rows(engine, entity, LOG_TIME, &[paths::FRAME], &main)
+            .into_iter()
+            .filter_map(|row| Some((row.times[0].unwrap_or(-1), text_of(row.value.as_ref()?)?))),
+    );
+    out
+}
+
+/// The particle positions at the last frame they were logged.
+fn last_positions(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    info: &EntityInfo,
+) -> Option<(i64, Vec<[f32; 3]>)> {
+    let component = info.components.iter().find(|c| c.ends_with(":positions"))?;
+    let row = rows(engine, entity, paths::FRAME, &[], component)
+        .into_iter()
+        .rfind(|r| r.value.is_some())?;
+    let points = row.value?.value(0);
+    let points = points.as_fixed_size_list_opt()?;
+    let xyz = points.values().as_primitive_opt::<Float32Type>()?;
+    let xyz = xyz.values();
+    let positions = (0..points.len())
+        .map(|i| [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]])
+        .collect();
+    Some((row.index, positions))
+}
+
+/// One row of a query: its index value, the values of other timelines, and
+/// the component's list (one element), when the row has it.
+struct Row {
+    index: i64,
+    times: Vec<Option<i64>>,
+    value: Option<ListArray>,
+}
+
+/// A query over one entity (all its components, or only `component`).
+fn contents(entity: &EntityPath) -> QueryExpression {
+    QueryExpression {
+        view_contents: Some(ViewContentsSelector(
+            std::iter::once((entity.clone(), None)).collect(),
+        )),
+        ..Default::default()
     }
+}
+
+fn only(entity: &EntityPath, component: &str) -> QueryExpression {
+    let components = rerun::ComponentIdentifier::try_new(component)
+        .ok()
+        .map(|c| std::iter::once(c).collect());
+    QueryExpression {
+        view_contents: Some(ViewContentsSelector(
+            std::iter::once((entity.clone(), components)).collect(),
+        )),
+        ..Default::default()
+    }
+}
+
+/// Where the query's output has the timeline `name`.
+fn time_column(columns: &[ColumnDescriptor], name: &str) -> Option<usize> {
+    columns
+        .iter()
+        .position(|c| matches!(c, ColumnDescriptor::Time(t) if t.timeline_name().as_str() == name))
+}
+
+/// Where the query's output has a component column.
+fn component_column(columns: &[ColumnDescriptor]) -> Option<usize> {
+    columns
+        .iter()
+        .position(|c| matches!(c, ColumnDescriptor::Component(_)))
+}
+
+/// The entity's rows on the `index` timeline with the values of `also`
+/// (other timelines) and of `component`.
+fn rows(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    index: &str,
+    also: &[&str],
+    component: &str,
+) -> Vec<Row> {
+    let Ok(timeline) = TimelineName::try_new(index) else {
+        return Vec::new();
+    };
+    let query = QueryExpression {
+        filtered_index: Some(timeline),
+        include_static_columns: StaticColumnSelection::NonStaticOnly,
+        ..only(entity, component)
+    };
+    let columns = engine.selected_schema_for_query(&query);
+    let (Some(at), Some(value_at)) = (time_column(&columns, index), component_column(&columns))
+    else {
+        return Vec::new();
+    };
+    let also_at: Vec<Option<usize>> = also.iter().map(|t| time_column(&columns, t)).collect();
+    let mut out = Vec::new();
+    for row in engine.query(query).into_iter() {
+        let Some(index) = int64(&row[at]) else {
+            continue;
+        };
+        let times = also_at
+            .iter()
+            .map(|i| i.and_then(|i| int64(&row[i])))
+            .collect();
+        let value = row[value_at]
+            .as_list_opt::<i32>()
+            .filter(|l| !l.is_empty() && !l.is_null(0))
+            .cloned();
+        out.push(Row {
+            index,
+            times,
+            value,
+        });
+    }
+    out
+}
+
+/// The static value of `component`, if it has one.
+fn static_value(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    component: &str,
+) -> Option<ListArray> {
+    let query = QueryExpression {
+        include_static_columns: StaticColumnSelection::StaticOnly,
+        ..only(entity, component)
+    };
+    let columns = engine.selected_schema_for_query(&query);
+    let value_at = component_column(&columns)?;
+    let row = engine.query(query).into_iter().next()?;
+    let list = row.get(value_at)?.as_list_opt::<i32>()?;
+    (!list.is_empty() && !list.is_null(0)).then(|| list.clone())
+}
+
+/// The single value of an index column, as a raw `i64`.
+fn int64(column: &ArrayRef) -> Option<i64> {
+    if column.is_empty() || column.is_null(0) {
+        return None;
+    }
+    let raw = cast(column, &DataType::Int64).ok()?;
+    Some(raw.as_primitive::<Int64Type>().value(0))
 }
