@@ -699,3 +699,38 @@ fn a_branch_draws_its_parent_beside_it() {
     assert_eq!(count("/metrics/strain/parent"), Some(11), "{rows:?}");
     assert_eq!(count("/metrics/violation/curvature/parent"), Some(11));
 }
+
+/// A preset file as the base: named relative to the saved file when they
+/// share a directory, else by its absolute path; both load back.
+#[test]
+fn saving_as_a_diff_of_a_preset_file() {
+    use weft::app::preset_diff::as_extension;
+    let dir = tempfile::tempdir().unwrap();
+    let base_path = dir.path().join("base.toml");
+    std::fs::write(
+        &base_path,
+        "extend = \"hanging_sheet\"\ndescription = \"mine\"\n",
+    )
+    .unwrap();
+    let base_arg = base_path.to_str().unwrap();
+    let base = load::load(base_arg, &[]).unwrap().preset;
+    let tuned = load::load(base_arg, &["solver.iterations=7".parse().unwrap()])
+        .unwrap()
+        .preset;
+    let near = dir.path().join("tuned.toml");
+    let text = as_extension("saved", base_arg, &base, &tuned, &near).unwrap();
+    assert!(text.contains("extend = \"base.toml\""), "{text}");
+    std::fs::write(&near, &text).unwrap();
+    assert_eq!(load::load(near.to_str().unwrap(), &[]).unwrap().preset, tuned);
+
+    let other = tempfile::tempdir().unwrap();
+    let far = other.path().join("tuned.toml");
+    let text = as_extension("saved", base_arg, &base, &tuned, &far).unwrap();
+    let abs = std::fs::canonicalize(&base_path).unwrap();
+    assert!(
+        text.contains(&format!("extend = \"{}\"", abs.display())),
+        "{text}"
+    );
+    std::fs::write(&far, &text).unwrap();
+    assert_eq!(load::load(far.to_str().unwrap(), &[]).unwrap().preset, tuned);
+}
