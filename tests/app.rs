@@ -721,7 +721,10 @@ fn saving_as_a_diff_of_a_preset_file() {
     let text = as_extension("saved", base_arg, &base, &tuned, &near).unwrap();
     assert!(text.contains("extend = \"base.toml\""), "{text}");
     std::fs::write(&near, &text).unwrap();
-    assert_eq!(load::load(near.to_str().unwrap(), &[]).unwrap().preset, tuned);
+    assert_eq!(
+        load::load(near.to_str().unwrap(), &[]).unwrap().preset,
+        tuned
+    );
 
     let other = tempfile::tempdir().unwrap();
     let far = other.path().join("tuned.toml");
@@ -732,5 +735,8 @@ fn saving_as_a_diff_of_a_preset_file() {
         "{text}"
     );
     std::fs::write(&far, &text).unwrap();
-    assert_eq!(load::load(far.to_str().unwrap(), &[]).unwrap().preset, tuned);
+    assert_eq!(
+        load::load(far.to_str().unwrap(), &[]).unwrap().preset,
+        tuned
+    );
 }

@@ -722,6 +722,8 @@ fn open(
     let (rec, tee) = stream(forward.clone(), &name, file);
     let mut telemetry = Telemetry::new(rec.clone(), settings);
     telemetry.forget();
+    // For hovering a particle in the viewer (at level full).
+    telemetry.set_particle_values(true);
     let mut run = match (scene, snapshot) {
         (Some((scene, resolved)), _) => Run::start(scene, telemetry, preset_name, &resolved),
         (_, Some(snapshot)) => {

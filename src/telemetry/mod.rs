@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | `world` | Z-up view coordinates | static |
 //! | `world/cloth/particles` | points, coloured by `color_by` | summary |
-//! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` | full |
+//! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` | full, with `set_particle_values` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
@@ -48,6 +48,7 @@ pub struct Telemetry {
     last_tuning: Option<Tuning>,
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
+    particle_values: bool,
 }
 
 impl Telemetry {
@@ -58,7 +59,16 @@ impl Telemetry {
             settings,
             last_tuning: None,
             last_cost: Duration::ZERO,
+            particle_values: false,
         }
+    }
+
+    /// Whether each frame at level full also logs every particle's values
+    /// (strain, violation, δx and δθ per family) on the particles entity,
+    /// for hovering in the viewer. The desktop debugger turns this on;
+    /// `weft record` leaves it off (it adds about a third to a full file).
+    pub fn set_particle_values(&mut self, on: bool) {
+        self.particle_values = on;
     }
 
     /// The settings in force.
@@ -400,7 +410,9 @@ impl Telemetry {
             if let Some(d) = diag {
                 self.log_corrections(x, d)?;
             }
-            self.log_particle_values(scene)?;
+            if self.particle_values {
+                self.log_particle_values(scene)?;
+            }
             for (name, pose) in scene.body_names().zip(scene.body_poses()) {
                 rec.log(
                     paths::body(name),
