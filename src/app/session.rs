@@ -327,10 +327,7 @@ impl Worker {
             Command::Load(loaded, name) => {
                 self.stop_recording();
                 self.name = name;
-                let tuning = Tuning {
-                    solver: loaded.preset.solver,
-                    wind: loaded.preset.environment.wind,
-                };
+                let tuning = Tuning::of(&loaded.preset);
                 self.loaded = *loaded.clone();
                 self.restart(*loaded, tuning);
             }
@@ -340,8 +337,7 @@ impl Worker {
                 // (stored in its preset), so `weft replay` reproduces it.
                 let tuning = self.run.scene.tuning();
                 let mut loaded = self.loaded.clone();
-                loaded.preset.solver = tuning.solver;
-                loaded.preset.environment.wind = tuning.wind;
+                tuning.apply_to(&mut loaded.preset);
                 loaded.preset.telemetry = *self.run.telemetry.settings();
                 loaded.resolved = crate::scene::load::to_toml(&loaded.preset);
                 // What is already logged goes to the viewer only.
@@ -379,8 +375,7 @@ impl Worker {
     }
 
     fn restart(&mut self, mut loaded: Loaded, tuning: Tuning) {
-        loaded.preset.solver = tuning.solver;
-        loaded.preset.environment.wind = tuning.wind;
+        tuning.apply_to(&mut loaded.preset);
         match new_run(&loaded, &self.name, self.rec.clone()) {
             Ok(run) => {
                 self.run = run;
