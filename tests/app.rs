@@ -349,13 +349,8 @@ fn a_branch_is_bit_identical_up_to_its_frame() {
         session.status().digest
     };
     let at_45 = step_to(45);
-    let tuning = |s: &weft::app::session::Status| {
-        let p = s.preset.as_ref().unwrap();
-        weft::scene::Tuning {
-            solver: p.solver,
-            wind: p.environment.wind,
-        }
-    };
+    let tuning =
+        |s: &weft::app::session::Status| weft::scene::Tuning::of(s.preset.as_ref().unwrap());
     // A change at frame 50 is part of the parent's story, replayed too.
     step_to(49);
     let mut t = tuning(&session.status());

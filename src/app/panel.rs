@@ -100,10 +100,7 @@ impl Panel {
             .unwrap_or("preset")
             .to_string();
         let mut p = Self {
-            tuning: Tuning {
-                solver: preset.solver,
-                wind: preset.environment.wind,
-            },
+            tuning: Tuning::of(&preset),
             telemetry: preset.telemetry,
             speed: 1.0,
             open: status.preset_name.clone(),
@@ -139,10 +136,7 @@ impl Panel {
     }
 
     fn sync(&mut self, preset: &Preset) {
-        self.tuning = Tuning {
-            solver: preset.solver,
-            wind: preset.environment.wind,
-        };
+        self.tuning = Tuning::of(preset);
         self.telemetry = preset.telemetry;
     }
 
@@ -463,18 +457,19 @@ impl Panel {
             });
     }
 
-    /// Sends the tuning if it validates, else restores the last good one.
+    /// Sends the tuning if it validates (`Tuning::validate`), else restores
+    /// the last good one and shows why.
     fn commit(&mut self, session: &Session, before: Tuning) {
         if self.tuning == before {
             return;
         }
-        match self.tuning.solver.validate() {
+        match self.tuning.validate() {
             Ok(()) => {
                 session.send(Command::Tune(self.tuning));
                 self.message = None;
             }
             Err(e) => {
-                self.say(false, e.under("solver.").to_string());
+                self.say(false, e.to_string());
                 self.tuning = before;
             }
         }
@@ -568,18 +563,7 @@ impl Panel {
         ui.add(Slider::new(&mut w.gust, 0.0..=20.0).text("gust (m/s)"));
         ui.add(Slider::new(&mut w.gust_period, 0.0..=10.0).text("gust period (s)"));
         ui.add(Slider::new(&mut w.sway, 0.0..=90.0).text("sway (°)"));
-        if self.tuning != before {
-            let w = self.tuning.wind;
-            if w.velocity.is_finite() && w.velocity.abs().max_element() <= 1e3 {
-                session.send(Command::Tune(self.tuning));
-            } else {
-                self.say(
-                    false,
-                    "environment.wind.velocity: components must be finite, |v| ≤ 1000 m/s",
-                );
-                self.tuning = before;
-            }
-        }
+        self.commit(session, before);
     }
 
     fn telemetry_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
@@ -651,9 +635,7 @@ impl Panel {
         match load::with_overrides(current, std::slice::from_ref(&o)) {
             Err(e) => self.say(false, e.to_string()),
             Ok(loaded) => {
-                let live = ["solver.", "environment.wind.", "telemetry."]
-                    .iter()
-                    .any(|p| o.key.starts_with(p));
+                let live = Tuning::is_live(&o.key) || o.key.starts_with("telemetry.");
                 self.sync(&loaded.preset);
                 if live {
                     session.send(Command::Tune(self.tuning));

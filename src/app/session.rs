@@ -458,8 +458,7 @@ impl Worker {
     fn current_loaded(&self) -> Loaded {
         let tuning = self.run.scene.tuning();
         let mut loaded = self.loaded.clone();
-        loaded.preset.solver = tuning.solver;
-        loaded.preset.environment.wind = tuning.wind;
+        tuning.apply_to(&mut loaded.preset);
         loaded.preset.telemetry = *self.run.telemetry.settings();
         loaded.resolved = load::to_toml(&loaded.preset);
         loaded
@@ -700,8 +699,7 @@ fn open(
         _ => unreachable!("a run starts from a scene or a snapshot"),
     };
     if let Some(t) = tuning {
-        current.solver = t.solver;
-        current.environment.wind = t.wind;
+        t.apply_to(&mut current);
     }
     let changes = base
         .as_ref()
