@@ -735,3 +735,56 @@ fn saving_as_a_diff_of_a_preset_file() {
         tuned
     );
 }
+
+/// The viewer's events reach the panel: a particle clicked in the 3D view,
+/// the time cursor on `sim_time` (nanoseconds) and on `frame`.
+#[test]
+fn viewer_events_reach_the_panel() {
+    use re_viewer::external::re_log_types::{EntityPath, Instance, TimeReal};
+    use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
+    let link = std::sync::Mutex::new(weft::app::panel::ViewerLink::default());
+    let event = |kind| ViewerEvent {
+        application_id: "weft".into(),
+        recording_id: "rec_1".into(),
+        segment_id: None,
+        kind,
+    };
+    let click = |path: &str, instance: u64| {
+        event(ViewerEventKind::SelectionChange {
+            items: vec![SelectionChangeItem::Entity {
+                entity_path: EntityPath::from(path),
+                instance_id: Instance::from(instance),
+                view_name: Some("Cloth".into()),
+                position: None,
+            }],
+        })
+    };
+    weft::app::on_viewer_event(&link, click(paths::MESH, 3));
+    assert_eq!(link.lock().unwrap().selected, None, "not a particle");
+    weft::app::on_viewer_event(&link, click(paths::PARTICLES, 23));
+    assert_eq!(
+        link.lock().unwrap().selected,
+        Some(("rec_1".to_string(), 23))
+    );
+    let time = |t: f64| {
+        event(ViewerEventKind::TimeUpdate {
+            time: TimeReal::from(t),
+        })
+    };
+    weft::app::on_viewer_event(&link, time(2.5e9));
+    assert_eq!(
+        link.lock().unwrap().cursor,
+        Some(("rec_1".to_string(), BranchAt::Time(2.5)))
+    );
+    weft::app::on_viewer_event(
+        &link,
+        event(ViewerEventKind::TimelineChange {
+            timeline_name: "frame".into(),
+            time: TimeReal::from(120.0),
+        }),
+    );
+    assert_eq!(
+        link.lock().unwrap().cursor,
+        Some(("rec_1".to_string(), BranchAt::Frame(120)))
+    );
+}

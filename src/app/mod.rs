@@ -154,7 +154,7 @@ impl WeftApp {
 
 /// What the viewer reports, passed on to the panel: the time cursor and
 /// timeline, and a particle selected in the 3D view.
-fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: ViewerEvent) {
+pub fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: ViewerEvent) {
     let recording = event.recording_id.to_string();
     let mut link = link.lock().expect("not poisoned");
     match event.kind {
