@@ -204,7 +204,9 @@ pub fn run(
         loaded,
         preset.to_string(),
         move |msg: &rerun::log::LogMsg| {
-            let _ = tx.send(msg.clone().into());
+            // The viewer's end closes only with the window, when nothing is
+            // left to show a message to.
+            tx.send(msg.clone().into()).ok();
         },
     )
     .map_err(anyhow::Error::msg)?;

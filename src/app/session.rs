@@ -159,10 +159,13 @@ impl Tee {
     }
 
     /// Writes the footer and closes the file, if there is one.
-    fn stop(&self) {
+    fn stop(&self) -> Result<(), String> {
         let file = self.file.lock().expect("not poisoned").take();
-        if let Some(f) = file {
-            let _ = f.flush_blocking(Duration::from_secs(10));
+        match file {
+            Some(f) => f
+                .flush_blocking(Duration::from_secs(10))
+                .map_err(|e| format!("the recording file may be incomplete: {e}")),
+            None => Ok(()),
         }
     }
 }
@@ -226,8 +229,13 @@ impl Session {
     }
 
     /// Sends a command; it is handled before the next step.
+    /// If the simulation thread has ended (it only does on a bug), the
+    /// status says so.
     pub fn send(&self, c: Command) {
-        let _ = self.tx.send(c);
+        if self.tx.send(c).is_err() {
+            self.status.lock().expect("not poisoned").error =
+                Some("the simulation thread has stopped; restart weft".into());
+        }
     }
 
     /// The latest status.
@@ -253,8 +261,10 @@ impl Drop for Session {
         // Closing the channel ends the worker, which closes any recording.
         let (tx, _) = channel();
         drop(std::mem::replace(&mut self.tx, tx));
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
+        if let Some(t) = self.thread.take()
+            && t.join().is_err()
+        {
+            eprintln!("error: the simulation thread panicked");
         }
     }
 }
@@ -416,7 +426,9 @@ impl Worker {
                     "telemetry settings: {}",
                     crate::scene::load::to_toml(&t).replace('\n', " ")
                 );
-                let _ = self.run.telemetry.log_event(frame, time, &text);
+                if let Err(e) = self.run.telemetry.log_event(frame, time, &text) {
+                    self.set_error(Some(e.to_string()));
+                }
                 self.run.telemetry.set_settings(t);
             }
             Command::Load(loaded, name) => {
@@ -520,6 +532,9 @@ impl Worker {
         let base = load::load(&self.name, &[]).ok().map(|l| l.preset);
         match open(&self.forward, start, &self.name, info, settings, base, file) {
             Ok(opened) => {
+                // A new run starts with a clean status; what goes wrong in
+                // closing the old one still shows.
+                self.set_error(None);
                 self.finish();
                 self.stop_recording();
                 if opened.info.parent.is_none() {
@@ -527,12 +542,14 @@ impl Worker {
                 }
                 self.tee = opened.tee;
                 let old = std::mem::replace(&mut self.rec, opened.rec);
-                let _ = old.flush_blocking();
+                let flushed = old.flush_blocking();
                 self.run = opened.run;
                 self.history = opened.history;
                 self.info = opened.info.clone();
                 self.runs.push(opened.info);
-                self.set_error(None);
+                if let Err(e) = flushed {
+                    self.set_error(Some(format!("the previous run: {e}")));
+                }
                 true
             }
             Err(e) => {
@@ -542,18 +559,25 @@ impl Worker {
         }
     }
 
-    /// Logs the run's summary and its result properties, and flushes.
+    /// Logs the run's summary and its result properties, and flushes; a
+    /// failure shows in the status.
     fn finish(&mut self) {
-        let figures = self.run.log_summary();
-        if let Ok(figures) = figures {
-            let checks = self
-                .run
-                .scene
-                .preset()
-                .expect
-                .map(|e| verdict(&e, &figures))
-                .unwrap_or_default();
-            let _ = self.rec.send_property(
+        if let Err(e) = self.end_run() {
+            self.set_error(Some(format!("ending the run: {e}")));
+        }
+    }
+
+    fn end_run(&mut self) -> Result<(), String> {
+        let figures = self.run.log_summary().map_err(|e| e.to_string())?;
+        let checks = self
+            .run
+            .scene
+            .preset()
+            .expect
+            .map(|e| verdict(&e, &figures))
+            .unwrap_or_default();
+        self.rec
+            .send_property(
                 "result",
                 &rerun::AnyValues::default()
                     .with_component::<rerun::components::Text>(
@@ -565,14 +589,16 @@ impl Worker {
                         [figures.final_state.clone()],
                     )
                     .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
-            );
-        }
-        let _ = self.rec.flush_blocking();
+            )
+            .map_err(|e| e.to_string())?;
+        self.rec.flush_blocking().map_err(|e| e.to_string())
     }
 
     /// Closes the recording file, if there is one.
     fn stop_recording(&mut self) {
-        self.tee.stop();
+        if let Err(e) = self.tee.stop() {
+            self.set_error(Some(e));
+        }
         self.status.lock().expect("not poisoned").recording = None;
     }
 
@@ -629,18 +655,23 @@ impl Worker {
     fn publish(&self) {
         let mut preset = self.run.scene.preset().clone();
         preset.telemetry = *self.run.telemetry.settings();
-        {
-            let mut s = self.status.lock().expect("not poisoned");
-            s.preset_name = self.name.clone();
-            s.preset = Some(preset);
-            s.run = self.info.clone();
-            s.runs = self.runs.clone();
-        }
-        self.publish_progress();
+        let progress = self.progress();
+        // One lock, so a reader never sees a new run with an old frame.
+        let mut s = self.status.lock().expect("not poisoned");
+        s.preset_name = self.name.clone();
+        s.preset = Some(preset);
+        s.run = self.info.clone();
+        s.runs = self.runs.clone();
+        progress.write(&mut s);
     }
 
     /// Publishes what a step changes (the preset does not change on a step).
     fn publish_progress(&self) {
+        let progress = self.progress();
+        progress.write(&mut self.status.lock().expect("not poisoned"));
+    }
+
+    fn progress(&self) -> Progress {
         let scene = &self.run.scene;
         let figures = self.run.figures();
         let checks = scene
@@ -648,21 +679,53 @@ impl Worker {
             .expect
             .map(|e| verdict(&e, &figures))
             .unwrap_or_default();
-        let particle = self.inspect.map(|i| readout(scene, i));
-        let mut s = self.status.lock().expect("not poisoned");
-        s.frame = scene.frame();
-        s.time = scene.time();
+        Progress {
+            frame: scene.frame(),
+            time: scene.time(),
+            playing: self.playing,
+            speed: self.speed,
+            steps_per_second: self.recent.len() as f32,
+            violations: scene
+                .solver()
+                .diagnostics()
+                .map(|d| (Family::ALL.map(|f| d.family(f).violation.max), d.max_strain)),
+            digest: figures.final_state,
+            checks,
+            checkpoints: self.history.checkpoints(),
+            particle: self.inspect.map(|i| readout(scene, i)),
+        }
+    }
+}
+
+/// What a step changes in the [`Status`], gathered before taking its lock.
+struct Progress {
+    frame: u64,
+    time: f64,
+    playing: bool,
+    speed: f32,
+    steps_per_second: f32,
+    violations: Option<([f32; Family::ALL.len()], f32)>,
+    digest: String,
+    checks: Vec<Check>,
+    checkpoints: (usize, u64),
+    particle: Option<ParticleReadout>,
+}
+
+impl Progress {
+    fn write(self, s: &mut Status) {
+        s.frame = self.frame;
+        s.time = self.time;
         s.playing = self.playing;
         s.speed = self.speed;
-        s.steps_per_second = self.recent.len() as f32;
-        if let Some(d) = scene.solver().diagnostics() {
-            s.max_violation = Family::ALL.map(|f| d.family(f).violation.max);
-            s.max_strain = d.max_strain;
+        s.steps_per_second = self.steps_per_second;
+        if let Some((max_violation, max_strain)) = self.violations {
+            s.max_violation = max_violation;
+            s.max_strain = max_strain;
         }
-        s.digest = figures.final_state;
-        s.checks = checks;
-        s.checkpoints = self.history.checkpoints();
-        s.particle = particle;
+        s.digest = self.digest;
+        s.checks = self.checks;
+        s.checkpoints = self.checkpoints;
+        s.particle = self.particle;
     }
 }
 
