@@ -1,4 +1,6 @@
-//! The `weft` command line: list, check, show, record and replay presets.
+//! The `weft` command line: list, check, show, record and replay presets;
+//! compare runs and sweep grids (their options live in `compare::command`
+//! and `sweep::command`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -56,6 +58,12 @@ pub enum Command {
         /// The `.rrd` file written by `weft record`.
         file: PathBuf,
     },
+    /// Compare recorded runs: preset diff, figures with deltas, where states part; a
+    /// comparison recording for the viewer; a `--fail-if` regression gate.
+    Compare(crate::compare::command::CompareArgs),
+    /// Run a preset over a grid of settings (in parallel, resumable, sharded on a
+    /// cluster), or collect a sweep's results into one table.
+    Sweep(crate::sweep::command::SweepArgs),
 }
 
 /// Options of `weft record`.
@@ -173,6 +181,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
+        Command::Compare(args) => crate::compare::command::compare(args),
+        Command::Sweep(args) => crate::sweep::command::sweep(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
             let stored = r

@@ -1,7 +1,8 @@
 //! Reading a recording back: entity paths, frames, array lengths, and the
 //! texts weft stores (preset, parameters, summary, events).
 //!
-//! Used by `weft replay` and by tests, with Rerun's own decoder.
+//! Used by `weft replay`, `weft compare` and by tests, with Rerun's own
+//! decoder.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -41,6 +42,27 @@ pub struct Recording {
     pub summary: Option<String>,
     /// Particle positions at the last logged frame.
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
+    /// Particle positions at every logged frame.
+    pub positions: BTreeMap<i64, Vec<[f32; 3]>>,
+    /// Every scalar series (`metrics/…`), by entity path: one sample per
+    /// logged frame, in frame order.
+    pub scalars: BTreeMap<String, Vec<Sample>>,
+    /// The simulated time of each frame any entity was logged at, in seconds.
+    pub sim_time: BTreeMap<i64, f64>,
+    /// The cloth's triangles (static), if stored.
+    pub triangles: Vec<[u32; 3]>,
+    /// Whether the file ends in the middle of a message (cut short by a crash
+    /// or a kill): everything before it was read.
+    pub truncated: bool,
+}
+
+/// One value of a scalar series.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// The frame it was logged at.
+    pub frame: i64,
+    /// The value.
+    pub value: f64,
 }
 
 impl Recording {
@@ -70,12 +92,17 @@ pub fn read(path: &Path) -> Result<Recording, String> {
     let decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
         .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
     let mut out = Recording::default();
+    let mut any = false;
     for msg in decoder {
         let msg = match msg {
             Ok(m) => m,
             // A truncated tail: keep what was read.
-            Err(_) => break,
+            Err(_) => {
+                out.truncated = true;
+                break;
+            }
         };
+        any = true;
         let LogMsg::ArrowMsg(store, arrow) = msg else {
             continue;
         };
@@ -85,6 +112,15 @@ pub fn read(path: &Path) -> Result<Recording, String> {
         let chunk = Chunk::from_arrow_msg(&arrow)
             .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
         absorb(&mut out, &chunk);
+    }
+    if !any && out.truncated {
+        return Err(format!(
+            "{}: not a Rerun recording (no message could be decoded)",
+            path.display()
+        ));
+    }
+    for series in out.scalars.values_mut() {
+        series.sort_by_key(|s| s.frame);
     }
     Ok(out)
 }
@@ -106,6 +142,11 @@ fn absorb(out: &mut Recording, chunk: &Chunk) {
     info.frames.extend(frames.iter().filter(|f| **f >= 0));
     if let Some(c) = chunk.timelines().get(&paths::SIM_TIME.into()) {
         info.sim_times.extend(c.times_raw().iter().copied());
+        for (frame, t) in frames.iter().zip(c.times_raw()) {
+            if *frame >= 0 {
+                out.sim_time.insert(*frame, *t as f64 * 1e-9);
+            }
+        }
     }
     let components = chunk.components();
     let mut main = None;
@@ -163,13 +204,38 @@ fn absorb(out: &mut Recording, chunk: &Chunk) {
                 rerun::Points3D::descriptor_positions().component,
             );
             for (frame, row) in frames.iter().zip(positions) {
+                let row: Vec<[f32; 3]> = row.iter().map(|p| [p.x(), p.y(), p.z()]).collect();
                 if out
                     .last_positions
                     .as_ref()
                     .is_none_or(|(f, _)| *frame >= *f)
                 {
-                    out.last_positions =
-                        Some((*frame, row.iter().map(|p| [p.x(), p.y(), p.z()]).collect()));
+                    out.last_positions = Some((*frame, row.clone()));
+                }
+                if *frame >= 0 {
+                    out.positions.insert(*frame, row);
+                }
+            }
+        }
+        paths::MESH if chunk.is_static() => {
+            let rows = chunk.iter_component::<rerun::components::TriangleIndices>(
+                rerun::Mesh3D::descriptor_triangle_indices().component,
+            );
+            for row in rows.filter(|r| !r.is_empty()) {
+                out.triangles = row.iter().map(|t| t.0.0).collect();
+            }
+        }
+        p if p.starts_with("metrics/") && !chunk.is_static() => {
+            let values = chunk.iter_component::<rerun::components::Scalar>(
+                rerun::Scalars::descriptor_scalars().component,
+            );
+            let series = out.scalars.entry(path.clone()).or_default();
+            for (frame, row) in frames.iter().zip(values) {
+                if let Some(v) = row.first() {
+                    series.push(Sample {
+                        frame: *frame,
+                        value: v.0.0,
+                    });
                 }
             }
         }
