@@ -65,7 +65,7 @@ impl RunData {
         let rec = read::read(path)?;
         let text = rec.preset.clone().ok_or_else(|| {
             format!(
-                "{}: not a weft recording (it holds no stored preset; weft record, weft sweep and the debugger's session files do)",
+                "{}: not a weft recording, or cut short before its preset was written (it holds no stored preset; weft record, weft sweep and the debugger's session files do)",
                 path.display()
             )
         })?;

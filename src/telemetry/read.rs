@@ -113,7 +113,7 @@ pub fn read(path: &Path) -> Result<Recording, String> {
             .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
         absorb(&mut out, &chunk);
     }
-    if !any && out.truncated {
+    if !any {
         return Err(format!(
             "{}: not a Rerun recording (no message could be decoded)",
             path.display()
