@@ -89,11 +89,11 @@ const MAIN: [&str; 5] = [
 /// complete message.
 pub fn read(path: &Path) -> Result<Recording, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
+    let mut decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
         .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
     let mut out = Recording::default();
     let mut any = false;
-    for msg in decoder {
+    for msg in decoder.by_ref() {
         let msg = match msg {
             Ok(m) => m,
             // A truncated tail: keep what was read.
@@ -112,6 +112,10 @@ pub fn read(path: &Path) -> Result<Recording, String> {
         let chunk = Chunk::from_arrow_msg(&arrow)
             .map_err(|e| format!("{}: bad chunk: {e}", path.display()))?;
         absorb(&mut out, &chunk);
+    }
+    // A file closed properly ends with a footer; one cut short has none.
+    if decoder.rrd_manifests().map_or(true, |m| m.is_empty()) {
+        out.truncated = true;
     }
     if !any {
         return Err(format!(
