@@ -375,3 +375,15 @@ fn bad_sweeps_exit_2_with_a_located_message_before_running() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(collect::read(&out).unwrap().points.len(), 1);
 }
+
+#[test]
+fn docs_cluster_shows_the_scripts_ci_runs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/cluster.md")).unwrap();
+    for file in ["docs/cluster/sweep.sbatch", "docs/cluster/sweep-job.yaml"] {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(doc.contains(text.trim_end()), "docs/cluster.md shows {file} as it is");
+    }
+    let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
+    assert!(ci.contains(".ci/slurm-test"), "CI runs the Slurm test");
+}
