@@ -58,11 +58,9 @@ pub enum Command {
         /// The `.rrd` file written by `weft record`.
         file: PathBuf,
     },
-    /// Compare recorded runs: preset diff, figures with deltas, where states part; a
-    /// comparison recording for the viewer; a `--fail-if` regression gate.
+    /// Compare recorded runs side by side, write a comparison for the viewer, gate on regressions.
     Compare(crate::compare::command::CompareArgs),
-    /// Run a preset over a grid of settings (in parallel, resumable, sharded on a
-    /// cluster), or collect a sweep's results into one table.
+    /// Run a preset over a grid of settings (resumable, sharded on clusters), or collect one.
     Sweep(crate::sweep::command::SweepArgs),
 }
 

@@ -38,8 +38,9 @@ pub struct CompareArgs {
     /// Draw the cloths on top of each other instead of side by side.
     #[arg(long)]
     pub overlay: bool,
-    /// The axis the cloths are set side by side along: x, y or z.
-    #[arg(long, default_value = "y", value_parser = ["x", "y", "z"])]
+    /// The axis the cloths are set side by side along: x, y, z, or auto (of
+    /// the two the cloth spans, the one it moves least along).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "x", "y", "z"])]
     pub axis: String,
     /// Exit with 1 if a run crosses this bound (repeatable); see below.
     #[arg(long = "fail-if", value_name = "BOUND")]
@@ -58,9 +59,10 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
             Placement::Overlay
         } else {
             Placement::SideBySide(match args.axis.as_str() {
-                "x" => Vec3::X,
-                "z" => Vec3::Z,
-                _ => Vec3::Y,
+                "x" => Some(Vec3::X),
+                "y" => Some(Vec3::Y),
+                "z" => Some(Vec3::Z),
+                _ => None,
             })
         };
         recording::write(&rec, &runs, placement, &text)?;

@@ -5,7 +5,7 @@
 //!
 //! | path | what |
 //! |---|---|
-//! | `world/{run}/particles`, `world/{run}/mesh` | each run's cloth, offset by `k · spacing` along the axis (0 with `--overlay`) |
+//! | `world/{run}/particles`, `world/{run}/mesh` | each run's cloth, the `k`-th offset by `k · spacing` along the axis (0 with `--overlay`) |
 //! | `metrics/strain/{run}` | largest edge strain |
 //! | `metrics/energy/{run}` | kinetic energy |
 //! | `metrics/violation/{family}/{run}` | largest violation per family |
@@ -60,10 +60,43 @@ pub fn entity_name(name: &str) -> String {
 /// How the cloths are placed in the 3D view.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Placement {
-    /// Side by side along this unit axis, spaced by the largest cloth's extent.
-    SideBySide(Vec3),
+    /// Side by side along this unit axis (`None`: [`auto_axis`]), spaced by
+    /// the largest extent any run's cloth reaches along it.
+    SideBySide(Option<Vec3>),
     /// On top of each other.
     Overlay,
+}
+
+/// The largest extent along `axis` of any run's particles, at its first
+/// logged frame (`first`) or over all its logged frames.
+fn extent(runs: &[RunData], axis: Vec3, first: bool) -> f32 {
+    runs.iter()
+        .map(|r| {
+            let frames = r.rec.positions.values().take(if first { 1 } else { usize::MAX });
+            let (lo, hi) = frames.flatten().map(|p| Vec3::from(*p).dot(axis)).fold(
+                (f32::MAX, f32::MIN),
+                |(l, h), v| (l.min(v), h.max(v)),
+            );
+            if hi >= lo { hi - lo } else { 0.0 }
+        })
+        .fold(0.0, f32::max)
+}
+
+/// The axis the cloths are set apart along by default: of the two axes the
+/// cloth spans at its start (the third being closest to its normal), the one
+/// along which the cloths move least over the run, so that they stay apart
+/// at every frame (a flag on a car driving along x is set apart along z).
+pub fn auto_axis(runs: &[RunData]) -> Vec3 {
+    let axes = [Vec3::X, Vec3::Y, Vec3::Z];
+    let normal = axes
+        .iter()
+        .copied()
+        .min_by(|a, b| extent(runs, *a, true).total_cmp(&extent(runs, *b, true)))
+        .unwrap_or(Vec3::Z);
+    axes.into_iter()
+        .filter(|a| *a != normal)
+        .min_by(|a, b| extent(runs, *a, false).total_cmp(&extent(runs, *b, false)))
+        .unwrap_or(Vec3::Y)
 }
 
 /// The layout the comparison opens with.
@@ -155,16 +188,8 @@ pub fn write(
     let spacing = match placement {
         Placement::Overlay => Vec3::ZERO,
         Placement::SideBySide(axis) => {
-            let extent = runs
-                .iter()
-                .filter_map(|r| r.rec.positions.values().next())
-                .map(|x| {
-                    let along = x.iter().map(|p| Vec3::from(*p).dot(axis));
-                    let (lo, hi) = along.fold((f32::MAX, f32::MIN), |(l, h), v| (l.min(v), h.max(v)));
-                    hi - lo
-                })
-                .fold(0.0f32, f32::max);
-            axis * (extent * 1.25 + 0.2)
+            let axis = axis.unwrap_or_else(|| auto_axis(runs));
+            axis * (extent(runs, axis, false) * 1.1 + 0.2)
         }
     };
     for (k, (run, name)) in runs.iter().zip(&names).enumerate() {

@@ -232,7 +232,7 @@ fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
         let runs = read_all(&best).map_err(anyhow::Error::msg)?;
         let text = report::report(&runs);
         let rec = recording::open(&runs, Some(&path), None)?;
-        recording::write(&rec, &runs, recording::Placement::SideBySide(glam::Vec3::Y), &text)?;
+        recording::write(&rec, &runs, recording::Placement::SideBySide(None), &text)?;
         drop(rec);
         eprintln!(
             "the first {} by {}: {} → {} (weft compare {} for the details)",

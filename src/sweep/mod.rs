@@ -216,36 +216,50 @@ impl Plan {
         }
     }
 
-    /// Estimated wall seconds for the points of `shard` on `jobs` threads,
-    /// from timing a few frames of the first point here (without telemetry).
+    /// Estimated wall seconds for the points of `shard` on `jobs` threads:
+    /// a few frames of up to [`SAMPLES`] points spread over the grid are
+    /// timed here (without telemetry), since points differ in cost.
     pub fn estimate(&self, shard: Option<Shard>, jobs: usize) -> f64 {
-        let Some((_, first)) = self.points.first() else {
-            return 0.0;
-        };
-        let Ok(mut scene) = Scene::new(&first.preset) else {
-            return 0.0;
-        };
-        let start = Instant::now();
-        let sample = 3;
-        for _ in 0..sample {
-            if scene.step().is_err() {
-                break;
-            }
-        }
-        let per_frame = start.elapsed().as_secs_f64() / sample as f64;
-        let frames: u64 = self
+        let mine: Vec<&(Point, Loaded)> = self
             .points
             .iter()
             .filter(|(p, _)| shard.is_none_or(|s| s.contains(p.index)))
-            .map(|(_, l)| match (self.frames, self.seconds) {
+            .collect();
+        if mine.is_empty() {
+            return 0.0;
+        }
+        let frames_of = |l: &Loaded| -> u64 {
+            match (self.frames, self.seconds) {
                 (Some(n), _) => n,
-                (None, Some(s)) => (s / l.preset.solver.dt).round() as u64,
-                (None, None) => (l.preset.duration / l.preset.solver.dt).round() as u64,
-            })
-            .sum();
-        per_frame * frames as f64 / jobs.max(1) as f64
+                (None, Some(s)) => (s / l.preset.solver.dt).round().max(1.0) as u64,
+                (None, None) => (l.preset.duration / l.preset.solver.dt).round().max(1.0) as u64,
+            }
+        };
+        let picks = SAMPLES.min(mine.len());
+        let mut seconds = 0.0;
+        for k in 0..picks {
+            let (_, loaded) = mine[k * (mine.len() - 1) / (picks - 1).max(1)];
+            let start = Instant::now();
+            let Ok(mut scene) = Scene::new(&loaded.preset) else {
+                continue;
+            };
+            let setup = start.elapsed().as_secs_f64();
+            let sample = 3.min(frames_of(loaded));
+            let start = Instant::now();
+            for _ in 0..sample {
+                if scene.step().is_err() {
+                    break;
+                }
+            }
+            let per_frame = start.elapsed().as_secs_f64() / sample.max(1) as f64;
+            seconds += setup + per_frame * frames_of(loaded) as f64;
+        }
+        seconds / picks as f64 * mine.len() as f64 / jobs.clamp(1, mine.len()) as f64
     }
 }
+
+/// How many points [`Plan::estimate`] times.
+pub const SAMPLES: usize = 6;
 
 /// Writes `bytes` to `path` through `path.part` and a rename, so `path`
 /// exists only complete.
