@@ -387,3 +387,44 @@ fn docs_cluster_shows_the_scripts_ci_runs() {
     let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
     assert!(ci.contains(".ci/slurm-test"), "CI runs the Slurm test");
 }
+
+#[test]
+fn ctrl_c_finishes_the_running_point_and_the_same_command_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("runs");
+    let args = |out: &Path| -> Vec<String> {
+        let mut a: Vec<String> = ["sweep", "hanging_sheet", "--set", "solver.iterations=1..4:4", "--frames", "20", "--jobs", "1", "--out"]
+            .map(String::from)
+            .to_vec();
+        a.push(out.to_str().unwrap().into());
+        a
+    };
+    let mut child = weft().args(args(&out)).stderr(std::process::Stdio::null()).spawn().unwrap();
+    let start = std::time::Instant::now();
+    while !out.join("0_iterations=1.json").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no point finished");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let done = collect::read(&out).unwrap();
+    assert!(!done.points.is_empty() && !done.missing.is_empty(), "stopped part-way: {:?}", done.missing);
+    assert!(
+        files(&out).iter().all(|f| !f.ends_with(".part")),
+        "the running point was finished, not cut: {:?}",
+        files(&out)
+    );
+    for p in &done.points {
+        assert!(weft::telemetry::read::read(&out.join(format!("{}.rrd", p.name))).unwrap().summary.is_some());
+    }
+    let o = weft().args(args(&out)).output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("{} already done", done.points.len())),
+        "{}",
+        stderr(&o)
+    );
+    assert!(collect::read(&out).unwrap().missing.is_empty());
+}
