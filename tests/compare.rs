@@ -17,7 +17,12 @@ fn weft() -> Command {
 }
 
 fn compare(args: &[&str], files: &[&Path]) -> Output {
-    weft().arg("compare").args(files).args(args).output().unwrap()
+    weft()
+        .arg("compare")
+        .args(files)
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn text(o: &Output) -> (String, String) {
@@ -42,7 +47,9 @@ fn record(
     overrides.push("telemetry.level=\"summary\"".parse().unwrap());
     let loaded = load::load(name, &overrides).unwrap();
     let scene = Scene::new(&loaded.preset).unwrap();
-    let rec = rerun::RecordingStreamBuilder::new("weft").save(path).unwrap();
+    let rec = rerun::RecordingStreamBuilder::new("weft")
+        .save(path)
+        .unwrap();
     let mut run = Run::start(
         scene,
         Telemetry::new(rec.clone(), loaded.preset.telemetry),
@@ -74,7 +81,14 @@ fn two_runs_differing_in_tuning_are_compared_key_by_key_and_frame_by_frame() {
     let b = dir.path().join("stiffer.rrd");
     let c = dir.path().join("tuned_later.rrd");
     record(&a, "hanging_sheet", &[], 12, None, true);
-    record(&b, "hanging_sheet", &["solver.iterations=3"], 12, None, true);
+    record(
+        &b,
+        "hanging_sheet",
+        &["solver.iterations=3"],
+        12,
+        None,
+        true,
+    );
     record(&c, "hanging_sheet", &[], 12, Some((7, 0.5)), true);
 
     let runs = read_all(&[a.clone(), b.clone(), c.clone()]).unwrap();
@@ -101,16 +115,27 @@ fn two_runs_differing_in_tuning_are_compared_key_by_key_and_frame_by_frame() {
             .map(String::from)
             .collect()
     };
-    assert_eq!(row("solver.iterations"), ["solver.iterations", "1", "3", "1"]);
     assert_eq!(
-        out.lines().filter(|l| l.starts_with("  solver.") || l.starts_with("  cloth.")).count(),
+        row("solver.iterations"),
+        ["solver.iterations", "1", "3", "1"]
+    );
+    assert_eq!(
+        out.lines()
+            .filter(|l| l.starts_with("  solver.") || l.starts_with("  cloth."))
+            .count(),
         1,
         "only the key that differs: {out}"
     );
     assert!(out.contains("tuned_later  frame 7 ("), "{out}");
     assert!(out.contains("solver.weights.curvature 0.1 → 0.5"), "{out}");
-    assert!(out.contains("stiffer      first differs at frame 1"), "{out}");
-    assert!(out.contains("tuned_later  first differs at frame 7"), "{out}");
+    assert!(
+        out.contains("stiffer      first differs at frame 1"),
+        "{out}"
+    );
+    assert!(
+        out.contains("tuned_later  first differs at frame 7"),
+        "{out}"
+    );
     assert!(out.contains("max strain"), "{out}");
     assert!(out.contains(" %)"), "deltas against A: {out}");
 
@@ -125,7 +150,11 @@ fn two_runs_differing_in_tuning_are_compared_key_by_key_and_frame_by_frame() {
             format!("world/{run}/particles"),
             format!("world/{run}/mesh"),
         ] {
-            assert_eq!(rec.frames(&path).len(), if path.contains("world") { 13 } else { 12 }, "{path}");
+            assert_eq!(
+                rec.frames(&path).len(),
+                if path.contains("world") { 13 } else { 12 },
+                "{path}"
+            );
         }
     }
     assert_eq!(rec.frames("metrics/difference/stiffer").len(), 13);
@@ -153,14 +182,31 @@ fn fail_if_exits_1_with_a_table_of_what_regressed() {
     let dir = tempfile::tempdir().unwrap();
     let a = dir.path().join("good.rrd");
     let b = dir.path().join("worse.rrd");
-    record(&a, "hanging_sheet", &["solver.iterations=3"], 10, None, true);
-    record(&b, "hanging_sheet", &["solver.iterations=1"], 10, None, true);
+    record(
+        &a,
+        "hanging_sheet",
+        &["solver.iterations=3"],
+        10,
+        None,
+        true,
+    );
+    record(
+        &b,
+        "hanging_sheet",
+        &["solver.iterations=1"],
+        10,
+        None,
+        true,
+    );
 
     let o = compare(&["--fail-if", "max_strain > 1.1*A"], &[&a, &b]);
     let (out, _) = text(&o);
     assert_eq!(o.status.code(), Some(1), "{out}");
     assert!(out.contains("regressed"), "{out}");
-    assert!(out.contains("worse") && out.contains("max_strain > 1.1*A"), "{out}");
+    assert!(
+        out.contains("worse") && out.contains("max_strain > 1.1*A"),
+        "{out}"
+    );
     // The other way round nothing regressed.
     let o = compare(&["--fail-if", "max_strain > 1.1*A"], &[&b, &a]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o).0);
@@ -169,7 +215,10 @@ fn fail_if_exits_1_with_a_table_of_what_regressed() {
     let (out, _) = text(&o);
     assert_eq!(o.status.code(), Some(1));
     assert!(out.contains("good") && out.contains("worse"), "{out}");
-    let o = compare(&["--fail-if", "frames < A", "--fail-if", "final_energy > 1e9"], &[&a, &b]);
+    let o = compare(
+        &["--fail-if", "frames < A", "--fail-if", "final_energy > 1e9"],
+        &[&a, &b],
+    );
     assert_eq!(o.status.code(), Some(0));
 
     for (bound, says) in [
@@ -187,9 +236,21 @@ fn fail_if_exits_1_with_a_table_of_what_regressed() {
 
     // The parser, directly.
     let b: Bound = "steps_per_second < 0.8*A-1".parse().unwrap();
-    assert_eq!(b.limit, Limit::Relative { scale: 0.8, offset: -1.0 });
+    assert_eq!(
+        b.limit,
+        Limit::Relative {
+            scale: 0.8,
+            offset: -1.0
+        }
+    );
     let b: Bound = "max_strain>A*1.5+0.01".parse().unwrap();
-    assert_eq!(b.limit, Limit::Relative { scale: 1.5, offset: 0.01 });
+    assert_eq!(
+        b.limit,
+        Limit::Relative {
+            scale: 1.5,
+            offset: 0.01
+        }
+    );
     let b: Bound = "max_strain >= 0.05".parse().unwrap();
     assert_eq!(b.limit, Limit::Absolute(0.05));
     let runs: Vec<RunData> = read_all(&[a, dir.path().join("worse.rrd")]).unwrap();
@@ -210,14 +271,26 @@ fn bad_inputs_exit_2_after_comparing_what_can_be() {
     std::fs::write(&junk, "this is not a recording\n").unwrap();
     let o = compare(&[], &[&a, &junk]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o).1.contains("junk.rrd: not a Rerun recording"), "{}", text(&o).1);
+    assert!(
+        text(&o).1.contains("junk.rrd: not a Rerun recording"),
+        "{}",
+        text(&o).1
+    );
 
     // A Rerun recording, but not weft's (a comparison recording has no preset).
     let cmp = dir.path().join("cmp.rrd");
-    assert!(compare(&["--save", cmp.to_str().unwrap()], &[&a]).status.success());
+    assert!(
+        compare(&["--save", cmp.to_str().unwrap()], &[&a])
+            .status
+            .success()
+    );
     let o = compare(&[], &[&a, &cmp]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o).1.contains("cmp.rrd: not a weft recording"), "{}", text(&o).1);
+    assert!(
+        text(&o).1.contains("cmp.rrd: not a weft recording"),
+        "{}",
+        text(&o).1
+    );
 
     // A run that never finished: compared up to where it stops.
     let cut = dir.path().join("cut.rrd");
@@ -226,8 +299,15 @@ fn bad_inputs_exit_2_after_comparing_what_can_be() {
     let (out, err) = text(&o);
     assert_eq!(o.status.code(), Some(2), "{out}{err}");
     assert!(out.contains("CUT SHORT"), "{out}");
-    assert!(out.contains("cut          identical at all 6 frames both logged") || out.contains("identical at all 6 frames"), "{out}");
-    assert!(err.contains("cut.rrd is cut short (it holds frames up to 5"), "{err}");
+    assert!(
+        out.contains("cut          identical at all 6 frames both logged")
+            || out.contains("identical at all 6 frames"),
+        "{out}"
+    );
+    assert!(
+        err.contains("cut.rrd is cut short (it holds frames up to 5"),
+        "{err}"
+    );
 
     // A file cut mid-message (a killed process, a full disk).
     let bytes = std::fs::read(&a).unwrap();
@@ -245,8 +325,14 @@ fn bad_inputs_exit_2_after_comparing_what_can_be() {
     let (out, err) = text(&o);
     assert_eq!(o.status.code(), Some(2), "{out}{err}");
     assert!(out.contains("max strain"), "{out}");
-    assert!(out.contains("other  not compared: their scenes differ beyond the tuning (attachments"), "{out}");
-    assert!(err.contains("a and other are runs of different scenes"), "{err}");
+    assert!(
+        out.contains("other  not compared: their scenes differ beyond the tuning (attachments"),
+        "{out}"
+    );
+    assert!(
+        err.contains("a and other are runs of different scenes"),
+        "{err}"
+    );
 
     // A missing file.
     let o = compare(&[], &[&a, &dir.path().join("nope.rrd")]);
@@ -259,14 +345,30 @@ fn sweep_points_and_record_files_compare_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("runs");
     let o = weft()
-        .args(["sweep", "hanging_sheet", "--set", "solver.weights.curvature=0.1,0.35", "--frames", "5", "--out"])
+        .args([
+            "sweep",
+            "hanging_sheet",
+            "--set",
+            "solver.weights.curvature=0.1,0.35",
+            "--frames",
+            "5",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
     assert!(o.status.success());
     let rec = dir.path().join("recorded.rrd");
     let o = weft()
-        .args(["record", "hanging_sheet", "--frames", "5", "--level", "summary", "--save"])
+        .args([
+            "record",
+            "hanging_sheet",
+            "--frames",
+            "5",
+            "--level",
+            "summary",
+            "--save",
+        ])
         .arg(&rec)
         .output()
         .unwrap();
@@ -277,7 +379,13 @@ fn sweep_points_and_record_files_compare_from_the_command_line() {
     let (stdout, err) = text(&o);
     assert_eq!(o.status.code(), Some(0), "{stdout}{err}");
     // The recorded run has the same settings as point 0: identical states.
-    assert!(stdout.contains("0_curvature=0.1   identical at all 6 frames"), "{stdout}");
+    assert!(
+        stdout.contains("0_curvature=0.1   identical at all 6 frames"),
+        "{stdout}"
+    );
     assert!(stdout.contains("solver.weights.curvature  0.1"), "{stdout}");
-    assert!(stdout.contains("1_curvature=0.35  first differs at frame"), "{stdout}");
+    assert!(
+        stdout.contains("1_curvature=0.35  first differs at frame"),
+        "{stdout}"
+    );
 }

@@ -74,21 +74,38 @@ fn grid_expands_lists_and_ranges_in_order_with_stable_names() {
     let b: Axis = "solver.iterations=5..20:4".parse().unwrap();
     assert_eq!(b.texts, ["5", "10", "15", "20"]);
     let c: Axis = "solver.iterations=1..2:3".parse().unwrap();
-    assert_eq!(c.texts, ["1.0", "1.5", "2.0"], "a fractional step gives floats");
-    let d: Axis = "environment.wind.velocity=[0, 1, 0],[2, 0, 0]".parse().unwrap();
+    assert_eq!(
+        c.texts,
+        ["1.0", "1.5", "2.0"],
+        "a fractional step gives floats"
+    );
+    let d: Axis = "environment.wind.velocity=[0, 1, 0],[2, 0, 0]"
+        .parse()
+        .unwrap();
     assert_eq!(d.texts, ["[0, 1, 0]", "[2, 0, 0]"], "commas inside arrays");
     let fixed: Axis = "solver.substeps=4".parse().unwrap();
 
-    let points = grid::points(&[b.clone(), fixed, "solver.weights.curvature=0.1,0.35".parse().unwrap()]);
+    let points = grid::points(&[
+        b.clone(),
+        fixed,
+        "solver.weights.curvature=0.1,0.35".parse().unwrap(),
+    ]);
     assert_eq!(points.len(), 8);
     let names: Vec<&str> = points.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(
         names[..3],
-        ["0_iterations=5_curvature=0.1", "1_iterations=5_curvature=0.35", "2_iterations=10_curvature=0.1"],
+        [
+            "0_iterations=5_curvature=0.1",
+            "1_iterations=5_curvature=0.35",
+            "2_iterations=10_curvature=0.1"
+        ],
         "the first --set varies slowest; one-value axes are not in names"
     );
     assert!(points.iter().enumerate().all(|(i, p)| p.index == i));
-    assert_eq!(points[7].settings[1], ("solver.substeps".into(), "4".into()));
+    assert_eq!(
+        points[7].settings[1],
+        ("solver.substeps".into(), "4".into())
+    );
 
     // Names stay file-name safe, and keys sharing a last segment keep their path.
     let wind = grid::points(&[d]);
@@ -131,7 +148,10 @@ fn bad_lists_and_ranges_are_refused_with_their_reason() {
 
 #[test]
 fn shards_parse_check_and_come_from_slurm_or_kubernetes() {
-    assert_eq!("1/4".parse::<Shard>().unwrap(), Shard { index: 1, count: 4 });
+    assert_eq!(
+        "1/4".parse::<Shard>().unwrap(),
+        Shard { index: 1, count: 4 }
+    );
     for (s, says) in [
         ("3/2", "does not exist"),
         ("0/0", "at least 1"),
@@ -142,10 +162,18 @@ fn shards_parse_check_and_come_from_slurm_or_kubernetes() {
         assert!(e.contains(says), "{s}: {e}");
     }
     let env = |pairs: &'static [(&'static str, &'static str)]| {
-        move |k: &str| pairs.iter().find(|(n, _)| *n == k).map(|(_, v)| v.to_string())
+        move |k: &str| {
+            pairs
+                .iter()
+                .find(|(n, _)| *n == k)
+                .map(|(_, v)| v.to_string())
+        }
     };
     assert_eq!(shard::resolve(None, None, env(&[])).unwrap(), None);
-    let slurm = env(&[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_COUNT", "4")]);
+    let slurm = env(&[
+        ("SLURM_ARRAY_TASK_ID", "3"),
+        ("SLURM_ARRAY_TASK_COUNT", "4"),
+    ]);
     assert_eq!(
         shard::resolve(None, None, slurm).unwrap(),
         Some(Shard { index: 3, count: 4 })
@@ -156,21 +184,42 @@ fn shards_parse_check_and_come_from_slurm_or_kubernetes() {
         ("SLURM_ARRAY_TASK_COUNT", "4"),
         ("SLURM_ARRAY_TASK_MIN", "1"),
     ]);
-    assert_eq!(shard::resolve(None, None, from_one).unwrap(), Some(Shard { index: 3, count: 4 }));
+    assert_eq!(
+        shard::resolve(None, None, from_one).unwrap(),
+        Some(Shard { index: 3, count: 4 })
+    );
     let stepped = env(&[
         ("SLURM_ARRAY_TASK_ID", "6"),
         ("SLURM_ARRAY_TASK_COUNT", "4"),
         ("SLURM_ARRAY_TASK_STEP", "2"),
     ]);
-    assert_eq!(shard::resolve(None, None, stepped).unwrap(), Some(Shard { index: 3, count: 4 }));
+    assert_eq!(
+        shard::resolve(None, None, stepped).unwrap(),
+        Some(Shard { index: 3, count: 4 })
+    );
     // The command line wins over the environment.
     let flag = Some(Shard { index: 0, count: 2 });
     assert_eq!(shard::resolve(flag, None, slurm).unwrap(), flag);
     let k8s = env(&[("JOB_COMPLETION_INDEX", "2")]);
-    assert_eq!(shard::resolve(None, Some(3), k8s).unwrap(), Some(Shard { index: 2, count: 3 }));
-    assert!(shard::resolve(None, None, k8s).unwrap_err().contains("--shards N"));
-    assert!(shard::resolve(None, Some(2), k8s).unwrap_err().contains("does not exist"));
-    assert!(shard::resolve(None, Some(2), env(&[])).unwrap_err().contains("--shard I/2"));
+    assert_eq!(
+        shard::resolve(None, Some(3), k8s).unwrap(),
+        Some(Shard { index: 2, count: 3 })
+    );
+    assert!(
+        shard::resolve(None, None, k8s)
+            .unwrap_err()
+            .contains("--shards N")
+    );
+    assert!(
+        shard::resolve(None, Some(2), k8s)
+            .unwrap_err()
+            .contains("does not exist")
+    );
+    assert!(
+        shard::resolve(None, Some(2), env(&[]))
+            .unwrap_err()
+            .contains("--shard I/2")
+    );
 }
 
 #[test]
@@ -208,24 +257,43 @@ fn a_sweep_writes_every_point_and_resumes_after_an_interruption() {
     std::fs::rename(&cut, out.join(format!("{}.json.part", names[1]))).unwrap();
     std::fs::remove_file(out.join(format!("{}.rrd", names[3]))).unwrap();
     std::fs::remove_file(out.join(format!("{}.json", names[3]))).unwrap();
-    let kept = std::fs::metadata(out.join(format!("{}.rrd", names[0]))).unwrap().modified().unwrap();
+    let kept = std::fs::metadata(out.join(format!("{}.rrd", names[0])))
+        .unwrap()
+        .modified()
+        .unwrap();
 
     let o = sweep(&out, &["--jobs", "1"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(stderr(&o).contains("2 run, 2 already done"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("2 run, 2 already done"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(
-        std::fs::metadata(out.join(format!("{}.rrd", names[0]))).unwrap().modified().unwrap(),
+        std::fs::metadata(out.join(format!("{}.rrd", names[0])))
+            .unwrap()
+            .modified()
+            .unwrap(),
         kept,
         "a finished point is not run again"
     );
     assert_eq!(results(&out), before, "the resumed sweep equals the first");
-    let after: Vec<String> = files(&out).into_iter().filter(|f| !f.ends_with(".part")).collect();
+    let after: Vec<String> = files(&out)
+        .into_iter()
+        .filter(|f| !f.ends_with(".part"))
+        .collect();
     assert_eq!(after, expected);
 
     // Another grid in the same directory is refused, and nothing is touched.
     let o = run(&[
-        "sweep", "hanging_sheet", "--set", "solver.iterations=3,4", "--frames", "6",
-        "--out", out.to_str().unwrap(),
+        "sweep",
+        "hanging_sheet",
+        "--set",
+        "solver.iterations=3,4",
+        "--frames",
+        "6",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("holds another sweep"), "{}", stderr(&o));
@@ -265,7 +333,13 @@ fn parallel_and_sharded_sweeps_equal_the_serial_one() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("shard 1/2, 2 here"), "{}", stderr(&o));
     let got = results(&slurm);
-    assert_eq!(got.keys().collect::<Vec<_>>(), ["1_curvature=0.05_iterations=2", "3_curvature=0.3_iterations=2"]);
+    assert_eq!(
+        got.keys().collect::<Vec<_>>(),
+        [
+            "1_curvature=0.05_iterations=2",
+            "3_curvature=0.3_iterations=2"
+        ]
+    );
     assert!(got.iter().all(|(k, v)| reference[k] == *v));
 }
 
@@ -276,26 +350,61 @@ fn collect_sorts_and_prints_text_csv_json_and_markdown() {
     assert!(sweep(&out, &[]).status.success());
     let d = out.to_str().unwrap();
 
-    let o = run(&["sweep", "--collect", d, "--sort", "max_strain", "--csv", "--best", "2"]);
+    let o = run(&[
+        "sweep",
+        "--collect",
+        d,
+        "--sort",
+        "max_strain",
+        "--csv",
+        "--best",
+        "2",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = String::from_utf8(o.stdout.clone()).unwrap();
     let rows: Vec<Vec<&str>> = csv.lines().map(|l| l.split(',').collect()).collect();
     let col = |name: &str| rows[0].iter().position(|c| *c == name).unwrap();
     assert_eq!(rows.len(), 5);
-    for key in ["solver.weights.curvature", "solver.iterations", "max_violation.stretch", "verdict", "final_state"] {
+    for key in [
+        "solver.weights.curvature",
+        "solver.iterations",
+        "max_violation.stretch",
+        "verdict",
+        "final_state",
+    ] {
         col(key);
     }
-    let strains: Vec<f64> = rows[1..].iter().map(|r| r[col("max_strain")].parse().unwrap()).collect();
+    let strains: Vec<f64> = rows[1..]
+        .iter()
+        .map(|r| r[col("max_strain")].parse().unwrap())
+        .collect();
     assert!(strains.windows(2).all(|w| w[0] <= w[1]), "{strains:?}");
     // The best two, in a comparison recording.
     let best = weft::telemetry::read::read(&out.join("best.rrd")).unwrap();
     assert_eq!(
-        best.entities.keys().filter(|k| k.starts_with("metrics/strain/")).count(),
+        best.entities
+            .keys()
+            .filter(|k| k.starts_with("metrics/strain/"))
+            .count(),
         2
     );
-    assert!(stderr(&o).contains(rows[1][0]), "names the best: {}", stderr(&o));
+    assert!(
+        stderr(&o).contains(rows[1][0]),
+        "names the best: {}",
+        stderr(&o)
+    );
 
-    let o = run(&["sweep", "--collect", d, "--sort", "steps_per_second", "--desc", "--json", "--best", "0"]);
+    let o = run(&[
+        "sweep",
+        "--collect",
+        d,
+        "--sort",
+        "steps_per_second",
+        "--desc",
+        "--json",
+        "--best",
+        "0",
+    ]);
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let speeds: Vec<f64> = json
         .as_array()
@@ -307,7 +416,16 @@ fn collect_sorts_and_prints_text_csv_json_and_markdown() {
     assert!(speeds.windows(2).all(|w| w[0] >= w[1]), "{speeds:?}");
     assert!(json[0]["verdict"].is_string());
 
-    let o = run(&["sweep", "--collect", d, "--sort", "iterations", "--markdown", "--best", "0"]);
+    let o = run(&[
+        "sweep",
+        "--collect",
+        d,
+        "--sort",
+        "iterations",
+        "--markdown",
+        "--best",
+        "0",
+    ]);
     let md = String::from_utf8(o.stdout).unwrap();
     assert!(md.starts_with("| name |"), "{md}");
     assert_eq!(md.lines().count(), 6);
@@ -341,15 +459,46 @@ fn bad_sweeps_exit_2_with_a_located_message_before_running() {
             vec!["--set", "solver.iterations=2,x"],
             "--set solver.iterations: `solver.iterations`: invalid type",
         ),
-        (vec!["--set", "solver.iterations=2,x"], "at point 1 of the sweep: solver.iterations=x"),
-        (vec!["--set", "solver.weights.curvature=0.1,-2"], "solver.weights.curvature"),
-        (vec!["--set", "solver.iterationz=2,3"], "did you mean `iterations`?"),
-        (vec!["--set", "solver.iterations=1..4"], "say how many values"),
-        (vec!["--set", "solver.iterations=1,2", "--set", "solver.iterations=3"], "swept twice"),
-        (vec!["--set", "solver.iterations=1,2", "--shard", "3/2"], "shard 3 of 2 does not exist"),
-        (vec!["--set", "solver.iterations=1,2", "--shard", "0/0"], "at least 1"),
         (
-            vec!["--set", "solver.iterations=1..20:20", "--set", "solver.weights.curvature=0..1:20"],
+            vec!["--set", "solver.iterations=2,x"],
+            "at point 1 of the sweep: solver.iterations=x",
+        ),
+        (
+            vec!["--set", "solver.weights.curvature=0.1,-2"],
+            "solver.weights.curvature",
+        ),
+        (
+            vec!["--set", "solver.iterationz=2,3"],
+            "did you mean `iterations`?",
+        ),
+        (
+            vec!["--set", "solver.iterations=1..4"],
+            "say how many values",
+        ),
+        (
+            vec![
+                "--set",
+                "solver.iterations=1,2",
+                "--set",
+                "solver.iterations=3",
+            ],
+            "swept twice",
+        ),
+        (
+            vec!["--set", "solver.iterations=1,2", "--shard", "3/2"],
+            "shard 3 of 2 does not exist",
+        ),
+        (
+            vec!["--set", "solver.iterations=1,2", "--shard", "0/0"],
+            "at least 1",
+        ),
+        (
+            vec![
+                "--set",
+                "solver.iterations=1..20:20",
+                "--set",
+                "solver.weights.curvature=0..1:20",
+            ],
             "this sweep has 400 points and would take about",
         ),
     ] {
@@ -362,15 +511,36 @@ fn bad_sweeps_exit_2_with_a_located_message_before_running() {
     }
     // A long sweep of few points is refused too.
     let o = run(&[
-        "sweep", "hanging_sheet", "--frames", "100000000", "--out", o_, "--set", "solver.iterations=1,2",
+        "sweep",
+        "hanging_sheet",
+        "--frames",
+        "100000000",
+        "--out",
+        o_,
+        "--set",
+        "solver.iterations=1,2",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("this sweep has 2 points and would take about"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("this sweep has 2 points and would take about"),
+        "{}",
+        stderr(&o)
+    );
     assert!(stderr(&o).contains("--yes"));
     // Each shard is judged by its own share: shard 0 of 400 is one point.
     let o = run(&[
-        "sweep", "hanging_sheet", "--frames", "2", "--out", o_, "--set", "solver.iterations=1..20:20",
-        "--set", "solver.weights.curvature=0..1:20", "--shard", "0/400",
+        "sweep",
+        "hanging_sheet",
+        "--frames",
+        "2",
+        "--out",
+        o_,
+        "--set",
+        "solver.iterations=1..20:20",
+        "--set",
+        "solver.weights.curvature=0..1:20",
+        "--shard",
+        "0/400",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(collect::read(&out).unwrap().points.len(), 1);
@@ -382,7 +552,10 @@ fn docs_cluster_shows_the_scripts_ci_runs() {
     let doc = std::fs::read_to_string(root.join("docs/cluster.md")).unwrap();
     for file in ["docs/cluster/sweep.sbatch", "docs/cluster/sweep-job.yaml"] {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
-        assert!(doc.contains(text.trim_end()), "docs/cluster.md shows {file} as it is");
+        assert!(
+            doc.contains(text.trim_end()),
+            "docs/cluster.md shows {file} as it is"
+        );
     }
     let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
     assert!(ci.contains(".ci/slurm-test"), "CI runs the Slurm test");
@@ -393,31 +566,57 @@ fn ctrl_c_finishes_the_running_point_and_the_same_command_resumes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("runs");
     let args = |out: &Path| -> Vec<String> {
-        let mut a: Vec<String> = ["sweep", "hanging_sheet", "--set", "solver.iterations=1..4:4", "--frames", "20", "--jobs", "1", "--out"]
-            .map(String::from)
-            .to_vec();
+        let mut a: Vec<String> = [
+            "sweep",
+            "hanging_sheet",
+            "--set",
+            "solver.iterations=1..4:4",
+            "--frames",
+            "20",
+            "--jobs",
+            "1",
+            "--out",
+        ]
+        .map(String::from)
+        .to_vec();
         a.push(out.to_str().unwrap().into());
         a
     };
-    let mut child = weft().args(args(&out)).stderr(std::process::Stdio::null()).spawn().unwrap();
+    let mut child = weft()
+        .args(args(&out))
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
     let start = std::time::Instant::now();
     while !out.join("0_iterations=1.json").exists() {
         assert!(start.elapsed().as_secs() < 120, "no point finished");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(kill.success());
     let status = child.wait().unwrap();
     assert_eq!(status.code(), Some(130));
     let done = collect::read(&out).unwrap();
-    assert!(!done.points.is_empty() && !done.missing.is_empty(), "stopped part-way: {:?}", done.missing);
+    assert!(
+        !done.points.is_empty() && !done.missing.is_empty(),
+        "stopped part-way: {:?}",
+        done.missing
+    );
     assert!(
         files(&out).iter().all(|f| !f.ends_with(".part")),
         "the running point was finished, not cut: {:?}",
         files(&out)
     );
     for p in &done.points {
-        assert!(weft::telemetry::read::read(&out.join(format!("{}.rrd", p.name))).unwrap().summary.is_some());
+        assert!(
+            weft::telemetry::read::read(&out.join(format!("{}.rrd", p.name)))
+                .unwrap()
+                .summary
+                .is_some()
+        );
     }
     let o = weft().args(args(&out)).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));

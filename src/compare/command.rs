@@ -68,7 +68,11 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         recording::write(&rec, &runs, placement, &text)?;
         drop(rec);
         if let Some(path) = &args.save {
-            println!("\ncomparison written to {} (open it with `rerun {}`)", path.display(), path.display());
+            println!(
+                "\ncomparison written to {} (open it with `rerun {}`)",
+                path.display(),
+                path.display()
+            );
         }
     }
 
@@ -85,7 +89,11 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
             "{} is cut short (it holds frames up to {}{}): only what it holds was compared",
             r.path.display(),
             r.last_frame(),
-            if r.rec.truncated { ", then the file ends mid-message" } else { ", and no end-of-run summary" }
+            if r.rec.truncated {
+                ", then the file ends mid-message"
+            } else {
+                ", and no end-of-run summary"
+            }
         ));
     }
     let different: Vec<(&RunData, String)> = runs

@@ -18,7 +18,6 @@ use std::str::FromStr;
 
 use super::{RunData, figure, figure_names};
 
-
 /// A comparison operator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Op {
@@ -94,7 +93,10 @@ impl FromStr for Bound {
             .find_map(|(s, op)| text.find(s).map(|i| (i, *op, s.len())))
             .ok_or_else(|| format!("--fail-if `{text}`: no comparison; {syntax}"))?;
         let name = text[..i].trim();
-        let rhs: String = text[i + len..].chars().filter(|c| !c.is_whitespace()).collect();
+        let rhs: String = text[i + len..]
+            .chars()
+            .filter(|c| !c.is_whitespace())
+            .collect();
         if !figure_names().iter().any(|n| n == name) {
             let hint = crate::scene::load::nearest(name, figure_names().iter().map(|s| s.as_str()))
                 .map(|n| format!(" (did you mean `{n}`?)"))

@@ -85,7 +85,10 @@ impl RunData {
         let figures = match summary.map(toml::from_str::<Figures>) {
             Some(Ok(f)) => f,
             Some(Err(e)) => {
-                return Err(format!("{}: the stored summary is unreadable: {e}", path.display()));
+                return Err(format!(
+                    "{}: the stored summary is unreadable: {e}",
+                    path.display()
+                ));
             }
             None => rebuild_figures(&rec),
         };
@@ -273,9 +276,15 @@ pub fn preset_diff(runs: &[RunData]) -> Vec<(String, Vec<Option<String>>)> {
 /// Whether a key is part of the tuning or the telemetry, which may differ
 /// between runs whose particle states are still comparable.
 fn is_tuning(key: &str) -> bool {
-    ["solver.", "environment.wind.", "telemetry.", "expect.", "expect"]
-        .iter()
-        .any(|p| key.starts_with(p))
+    [
+        "solver.",
+        "environment.wind.",
+        "telemetry.",
+        "expect.",
+        "expect",
+    ]
+    .iter()
+    .any(|p| key.starts_with(p))
         || matches!(key, "description" | "duration")
 }
 

@@ -72,11 +72,15 @@ pub enum Placement {
 fn extent(runs: &[RunData], axis: Vec3, first: bool) -> f32 {
     runs.iter()
         .map(|r| {
-            let frames = r.rec.positions.values().take(if first { 1 } else { usize::MAX });
-            let (lo, hi) = frames.flatten().map(|p| Vec3::from(*p).dot(axis)).fold(
-                (f32::MAX, f32::MIN),
-                |(l, h), v| (l.min(v), h.max(v)),
-            );
+            let frames = r
+                .rec
+                .positions
+                .values()
+                .take(if first { 1 } else { usize::MAX });
+            let (lo, hi) = frames
+                .flatten()
+                .map(|p| Vec3::from(*p).dot(axis))
+                .fold((f32::MAX, f32::MIN), |(l, h), v| (l.min(v), h.max(v)));
             if hi >= lo { hi - lo } else { 0.0 }
         })
         .fold(0.0, f32::max)
@@ -126,10 +130,14 @@ pub fn blueprint(runs: &[RunData]) -> Blueprint {
     Blueprint::new(
         Horizontal::new([
             Vertical::new([
-                Spatial3DView::new("Cloths").with_origin(paths::WORLD).into(),
+                Spatial3DView::new("Cloths")
+                    .with_origin(paths::WORLD)
+                    .into(),
                 Horizontal::new([
                     TextLogView::new("Events").with_origin(paths::EVENTS).into(),
-                    TextDocumentView::new("Comparison").with_origin("runs").into(),
+                    TextDocumentView::new("Comparison")
+                        .with_origin("runs")
+                        .into(),
                 ])
                 .into(),
             ])
@@ -149,12 +157,12 @@ pub fn open(
     save: Option<&std::path::Path>,
     connect: Option<&str>,
 ) -> anyhow::Result<RecordingStream> {
-    let builder = rerun::RecordingStreamBuilder::new("weft-compare")
-        .with_default_blueprint(blueprint(runs));
+    let builder =
+        rerun::RecordingStreamBuilder::new("weft-compare").with_default_blueprint(blueprint(runs));
     if let Some(path) = save {
-        return builder
-            .save(path)
-            .map_err(|e| anyhow::anyhow!("cannot write the comparison to {}: {e}", path.display()));
+        return builder.save(path).map_err(|e| {
+            anyhow::anyhow!("cannot write the comparison to {}: {e}", path.display())
+        });
     }
     let url = connect.unwrap_or(crate::cli::DEFAULT_VIEWER);
     let rec = builder

@@ -136,7 +136,9 @@ fn states(a: &RunData, b: &RunData, w: usize) -> String {
     let picks: Vec<usize> = if n <= MAX_ROWS {
         (0..n).collect()
     } else {
-        (0..MAX_ROWS).map(|k| k * (n - 1) / (MAX_ROWS - 1)).collect()
+        (0..MAX_ROWS)
+            .map(|k| k * (n - 1) / (MAX_ROWS - 1))
+            .collect()
     };
     s += &format!(
         "  {:<w$}  largest distance per logged frame{}:\n",

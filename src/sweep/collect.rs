@@ -157,9 +157,20 @@ fn table(points: &[PointResult]) -> (Vec<String>, Vec<Vec<String>>) {
     let mut header = vec!["name".to_string()];
     header.extend(keys.iter().cloned());
     header.push("max_strain".into());
-    header.extend(Family::ALL.iter().map(|f| format!("max_violation.{}", f.name())));
     header.extend(
-        ["final_energy", "steps_per_second", "frames", "verdict", "final_state"].map(String::from),
+        Family::ALL
+            .iter()
+            .map(|f| format!("max_violation.{}", f.name())),
+    );
+    header.extend(
+        [
+            "final_energy",
+            "steps_per_second",
+            "frames",
+            "verdict",
+            "final_state",
+        ]
+        .map(String::from),
     );
     let rows = points
         .iter()

@@ -65,7 +65,12 @@ pub struct SweepArgs {
     #[arg(long, value_name = "DIR", conflicts_with_all = ["preset", "out", "set", "shard", "shards"])]
     pub collect: Option<PathBuf>,
     /// Sort the table by this figure, swept key, `name` or `index`.
-    #[arg(long, value_name = "FIGURE", default_value = "index", requires = "collect")]
+    #[arg(
+        long,
+        value_name = "FIGURE",
+        default_value = "index",
+        requires = "collect"
+    )]
     pub sort: String,
     /// Sort in descending order (e.g. for steps_per_second).
     #[arg(long, requires = "collect")]
@@ -98,8 +103,14 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
     };
     let shard = shard::resolve(args.shard, args.shards, |k| std::env::var(k).ok())
         .map_err(anyhow::Error::msg)?;
-    let plan = Plan::new(preset, args.set.clone(), args.frames, args.seconds, &args.level)
-        .map_err(anyhow::Error::msg)?;
+    let plan = Plan::new(
+        preset,
+        args.set.clone(),
+        args.frames,
+        args.seconds,
+        &args.level,
+    )
+    .map_err(anyhow::Error::msg)?;
     let jobs = args
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -114,7 +125,9 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
         bail!(
             "this sweep has {} points{} and would take about {} on {jobs} job(s) (from timing a few frames here); pass --yes to run it, or shard it (docs/cluster.md)",
             mine,
-            shard.map(|s| format!(" in shard {s} ({} in all)", plan.points.len())).unwrap_or_default(),
+            shard
+                .map(|s| format!(" in shard {s} ({} in all)", plan.points.len()))
+                .unwrap_or_default(),
             duration(estimate)
         );
     }
@@ -129,11 +142,9 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
     });
 
     let bar = indicatif::ProgressBar::new(0).with_style(
-        indicatif::ProgressStyle::with_template(
-            "{msg} [{bar:40}] {pos}/{len} points, eta {eta}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+        indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} points, eta {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
     );
     bar.set_message(preset.clone());
     let where_ = shard.map(|s| format!(", shard {s}")).unwrap_or_default();
@@ -171,7 +182,10 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
         outcome.ran,
         outcome.skipped,
         if outcome.left > 0 {
-            format!(", {} not run (interrupted: run the same command again to resume)", outcome.left)
+            format!(
+                ", {} not run (interrupted: run the same command again to resume)",
+                outcome.left
+            )
         } else {
             String::new()
         },
@@ -238,9 +252,15 @@ fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
             "the first {} by {}: {} → {} (weft compare {} for the details)",
             runs.len(),
             args.sort,
-            runs.iter().map(|r| r.name.as_str()).collect::<Vec<_>>().join(", "),
+            runs.iter()
+                .map(|r| r.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
             path.display(),
-            best.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(" ")
+            best.iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
         );
     }
     Ok(ExitCode::SUCCESS)

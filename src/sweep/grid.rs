@@ -57,7 +57,11 @@ fn float_text(v: f64) -> String {
 fn range(text: &str) -> Option<Result<Vec<String>, String>> {
     let (span, count) = text.rsplit_once(':').unwrap_or((text, ""));
     let (a, b) = span.split_once("..")?;
-    let bad = |what: &str| Some(Err(format!("range `{text}`: {what}; write A..B:N, e.g. 0.05..0.4:8")));
+    let bad = |what: &str| {
+        Some(Err(format!(
+            "range `{text}`: {what}; write A..B:N, e.g. 0.05..0.4:8"
+        )))
+    };
     let (Ok(x), Ok(y)) = (a.trim().parse::<f64>(), b.trim().parse::<f64>()) else {
         return bad("its ends must be numbers");
     };
@@ -73,9 +77,7 @@ fn range(text: &str) -> Option<Result<Vec<String>, String>> {
     if n < 2 {
         return bad("N must be at least 2");
     }
-    let integers = [a, b]
-        .iter()
-        .all(|s| s.trim().parse::<i64>().is_ok());
+    let integers = [a, b].iter().all(|s| s.trim().parse::<i64>().is_ok());
     let step = (y - x) / (n - 1) as f64;
     let whole_step = integers && step.fract() == 0.0;
     Some(Ok((0..n)
@@ -94,9 +96,9 @@ impl FromStr for Axis {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        let (key, raw) = s
-            .split_once('=')
-            .ok_or_else(|| format!("`{s}` is not of the form key.path=V1,V2,… or key.path=A..B:N"))?;
+        let (key, raw) = s.split_once('=').ok_or_else(|| {
+            format!("`{s}` is not of the form key.path=V1,V2,… or key.path=A..B:N")
+        })?;
         let key = key.trim();
         let mut texts = Vec::new();
         for v in split_values(raw) {

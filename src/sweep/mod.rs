@@ -148,7 +148,9 @@ impl Plan {
         if let Some(s) = seconds
             && !(s.is_finite() && s > 0.0)
         {
-            return Err(format!("--seconds {s}: expected a positive number of seconds"));
+            return Err(format!(
+                "--seconds {s}: expected a positive number of seconds"
+            ));
         }
         let level_set = Override {
             key: "telemetry.level".into(),
@@ -284,8 +286,12 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
     let json = serde_json::to_string_pretty(manifest).expect("manifest serializes");
     match std::fs::read_to_string(&path) {
         Ok(old) => {
-            let old: Manifest = serde_json::from_str(&old)
-                .map_err(|e| format!("{}: not a weft sweep manifest ({e}); use another --out", path.display()))?;
+            let old: Manifest = serde_json::from_str(&old).map_err(|e| {
+                format!(
+                    "{}: not a weft sweep manifest ({e}); use another --out",
+                    path.display()
+                )
+            })?;
             if old != *manifest {
                 let what = if old.preset != manifest.preset {
                     format!("preset {} instead of {}", old.preset, manifest.preset)
@@ -305,7 +311,8 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
             // Several shards may start at once: each writes through its own
             // temporary name, and the renames all put the same bytes in place.
             let tmp = dir.join(format!(".{MANIFEST}.{}", std::process::id()));
-            std::fs::write(&tmp, &json).map_err(|e| format!("cannot write in {}: {e}", dir.display()))?;
+            std::fs::write(&tmp, &json)
+                .map_err(|e| format!("cannot write in {}: {e}", dir.display()))?;
             std::fs::rename(&tmp, &path).map_err(|e| format!("writing {}: {e}", path.display()))
         }
     }
@@ -323,7 +330,12 @@ pub fn is_complete(dir: &Path, name: &str) -> bool {
 
 /// Runs one point and writes its files. A solver failure is a result (in the
 /// figures), not an error; errors are about files.
-pub fn run_point(plan: &Plan, point: &Point, loaded: &Loaded, dir: &Path) -> Result<PointResult, String> {
+pub fn run_point(
+    plan: &Plan,
+    point: &Point,
+    loaded: &Loaded,
+    dir: &Path,
+) -> Result<PointResult, String> {
     let rrd = dir.join(format!("{}.rrd", point.name));
     let part = part_path(&rrd);
     let scene = Scene::new(&loaded.preset).map_err(|e| format!("{}: {e}", point.name))?;
@@ -343,7 +355,8 @@ pub fn run_point(plan: &Plan, point: &Point, loaded: &Loaded, dir: &Path) -> Res
     let figures = run.finish().map_err(|e| format!("{}: {e}", point.name))?;
     stream.flush_blocking().ok();
     drop(stream);
-    std::fs::rename(&part, &rrd).map_err(|e| format!("renaming {} into place: {e}", part.display()))?;
+    std::fs::rename(&part, &rrd)
+        .map_err(|e| format!("renaming {} into place: {e}", part.display()))?;
     let checks = loaded
         .preset
         .expect

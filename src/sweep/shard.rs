@@ -57,9 +57,9 @@ impl FromStr for Shard {
             .split_once('/')
             .ok_or_else(|| format!("{origin}: expected I/N, e.g. 0/4 (the first of 4 shards)"))?;
         let num = |x: &str| {
-            x.trim()
-                .parse::<usize>()
-                .map_err(|_| format!("{origin}: `{x}` is not a whole number; expected I/N, e.g. 0/4"))
+            x.trim().parse::<usize>().map_err(|_| {
+                format!("{origin}: `{x}` is not a whole number; expected I/N, e.g. 0/4")
+            })
         };
         Shard::new(num(i)?, num(n)?, &origin)
     }
@@ -110,8 +110,12 @@ pub fn resolve(
         let count = shards.ok_or(
             "JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job): give the number of shards, the Job's completions, with --shards N",
         )?;
-        return Shard::new(index, count, &format!("JOB_COMPLETION_INDEX={index} with --shards {count}"))
-            .map(Some);
+        return Shard::new(
+            index,
+            count,
+            &format!("JOB_COMPLETION_INDEX={index} with --shards {count}"),
+        )
+        .map(Some);
     }
     if let Some(n) = shards {
         return Err(format!(
