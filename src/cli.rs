@@ -152,6 +152,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             for p in &presets {
                 match load::load(p, &set) {
                     Ok(l) => {
+                        warn(&l);
                         let c = &l.preset.cloth;
                         println!(
                             "ok      {p}: {}×{} cloth, {} bodies, {} colliders",
@@ -175,6 +176,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Command::Show { preset, set } => {
             let loaded = load::load(&preset, &set)?;
+            warn(&loaded);
             print!("{}", load::to_toml(&loaded.preset));
             Ok(ExitCode::SUCCESS)
         }
@@ -183,6 +185,12 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Sweep(args) => crate::sweep::command::sweep(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
+            if r.truncated {
+                println!(
+                    "{}: the file is cut short; compared what it holds",
+                    file.display()
+                );
+            }
             let stored = r
                 .recorded_digest
                 .as_deref()
@@ -223,6 +231,7 @@ fn gui(_preset: &str) -> anyhow::Result<ExitCode> {
 
 fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     let loaded = load::load(&args.preset, &args.overrides())?;
+    warn(&loaded);
     let preset = &loaded.preset;
     let scene =
         Scene::new(preset).with_context(|| format!("building the scene of {}", args.preset))?;
@@ -250,11 +259,13 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     // cleanly; a second one quits at once.
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    let _ = ctrlc::set_handler(move || {
+    if let Err(e) = ctrlc::set_handler(move || {
         if flag.swap(true, Ordering::Relaxed) {
             std::process::exit(130);
         }
-    });
+    }) {
+        eprintln!("warning: Ctrl-C will end the run without closing the file cleanly ({e})");
+    }
 
     let bar = indicatif::ProgressBar::new(frames).with_style(
         indicatif::ProgressStyle::with_template(
@@ -294,6 +305,13 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
         return Ok(ExitCode::FAILURE);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Prints a loaded preset's warnings to standard error.
+fn warn(loaded: &load::Loaded) {
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
 }
 
 fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {

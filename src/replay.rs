@@ -20,6 +20,8 @@ pub struct Replayed {
     pub positions_match: Option<bool>,
     /// Parameter changes applied.
     pub changes: usize,
+    /// Whether the file was cut short (what it holds was still compared).
+    pub truncated: bool,
 }
 
 impl Replayed {
@@ -94,5 +96,6 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
         recorded_digest,
         positions_match,
         changes: changes.len().saturating_sub(1),
+        truncated: rec.truncated,
     })
 }

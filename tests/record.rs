@@ -414,3 +414,66 @@ fn bad_outputs_fail_before_simulating_with_a_clear_message() {
         "{stderr}"
     );
 }
+
+#[test]
+fn each_recording_in_a_file_is_read_on_its_own() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.rrd"), dir.path().join("b.rrd"));
+    record_to(
+        &a,
+        "hanging_sheet",
+        &["telemetry.level=\"summary\""],
+        3,
+        |_| {},
+    );
+    record_to(
+        &b,
+        "hanging_sheet",
+        &[
+            "telemetry.level=\"summary\"",
+            "solver.weights.curvature=0.35",
+        ],
+        5,
+        |_| {},
+    );
+    let (one, two) = (read::read(&a).unwrap(), read::read(&b).unwrap());
+    assert!(!one.truncated && !two.truncated);
+    assert_ne!(one.id, two.id, "every run has its own recording id");
+
+    // Two runs in one file (as `cat a.rrd b.rrd` makes) stay two runs.
+    let both = dir.path().join("both.rrd");
+    let mut bytes = std::fs::read(&a).unwrap();
+    bytes.extend(std::fs::read(&b).unwrap());
+    std::fs::write(&both, &bytes).unwrap();
+    let all = read::read_all(&both).unwrap();
+    assert_eq!(all.len(), 2);
+    assert_eq!(
+        (all[0].id.as_str(), all[1].id.as_str()),
+        (one.id.as_str(), two.id.as_str())
+    );
+    assert_eq!(
+        all[0].frames(paths::PARTICLES),
+        one.frames(paths::PARTICLES)
+    );
+    assert_eq!(
+        all[1].frames(paths::PARTICLES),
+        (0..=5).collect::<Vec<i64>>()
+    );
+    assert_eq!(all[1].params, two.params);
+    assert_eq!(all[1].last_positions, two.last_positions);
+    let e = read::read(&both).unwrap_err();
+    assert!(e.contains("holds 2 recordings"), "{e}");
+
+    // A file cut short says so, and keeps what it holds.
+    let cut = dir.path().join("cut.rrd");
+    let len = std::fs::read(&b).unwrap().len();
+    std::fs::write(&cut, &std::fs::read(&b).unwrap()[..len * 3 / 4]).unwrap();
+    let partial = read::read(&cut).unwrap();
+    assert!(partial.truncated);
+    assert!(partial.preset.is_some());
+    let frames = partial.frames(paths::PARTICLES);
+    assert!(
+        two.frames(paths::PARTICLES).starts_with(&frames),
+        "{frames:?}"
+    );
+}

@@ -535,7 +535,7 @@ fn every_rejected_parameter_has_its_own_message() {
         let mut p = Params::default();
         mutate(&mut p);
         let err = p.validate().unwrap_err();
-        assert_eq!(err.name, *name);
+        assert_eq!(err.key, *name);
         let msg = err.to_string();
         assert!(msg.contains(name) && msg.contains("allowed"), "{msg}");
         assert!(messages.insert(msg.clone()), "duplicate message {msg}");

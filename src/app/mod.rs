@@ -49,6 +49,9 @@ impl eframe::App for WeftApp {
 /// Opens the window on `preset` (a shipped name or a file); blocks until it closes.
 pub fn run(preset: &str) -> anyhow::Result<()> {
     let loaded = load::load(preset, &[])?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {w}");
+    }
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();

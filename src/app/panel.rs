@@ -223,13 +223,7 @@ impl Panel {
                 self.message = None;
             }
             Err(e) => {
-                self.say(
-                    false,
-                    format!(
-                        "`solver.{}` = {} {}; allowed: {}",
-                        e.name, e.value, e.problem, e.range
-                    ),
-                );
+                self.say(false, e.under("solver.").to_string());
                 self.tuning = before;
             }
         }

@@ -14,7 +14,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::params::{ParamError, check_range};
+use super::params::{Range, RangeError};
 
 /// Smallest and largest grid side, in particles.
 pub const MIN_RESOLUTION: u32 = 2;
@@ -70,82 +70,27 @@ impl Default for ClothSpec {
 
 impl ClothSpec {
     /// Checks sizes, resolution and material against their ranges.
-    pub fn validate(&self) -> Result<(), ParamError> {
-        check_range(
-            "cloth.width",
-            self.width,
-            1e-3,
-            1e3,
-            false,
-            "0.001 ≤ width ≤ 1000 m",
-        )?;
-        check_range(
-            "cloth.height",
-            self.height,
-            1e-3,
-            1e3,
-            false,
-            "0.001 ≤ height ≤ 1000 m",
-        )?;
-        for (name, n) in [("cloth.weft", self.weft), ("cloth.warp", self.warp)] {
-            if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&n) {
-                return Err(ParamError {
-                    name,
-                    value: n.to_string(),
-                    problem: "is out of range",
-                    range: "2 ≤ particles per side ≤ 512",
-                });
-            }
-        }
-        check_range(
-            "cloth.density",
-            self.density,
-            1e-4,
-            1e3,
-            false,
-            "0.0001 ≤ density ≤ 1000 kg/m²",
-        )?;
-        check_range(
-            "cloth.thickness",
-            self.thickness,
-            0.0,
-            0.1,
-            false,
-            "0 ≤ thickness ≤ 0.1 m",
-        )?;
-        check_range(
-            "cloth.imperfection",
-            self.imperfection,
-            0.0,
-            0.01,
-            false,
-            "0 ≤ imperfection ≤ 0.01 m",
-        )?;
-        for (name, v) in [
-            ("cloth.origin", self.origin.to_array()),
-            (
-                "cloth.rotation",
-                [self.rotation.x, self.rotation.y, self.rotation.z],
-            ),
-        ] {
-            if v.iter().any(|c| !c.is_finite() || c.abs() > 1e6) {
-                return Err(ParamError {
-                    name,
-                    value: format!("{v:?}"),
-                    problem: "is not finite",
-                    range: "finite components with magnitude ≤ 1e6",
-                });
-            }
-        }
-        let norm = self.rotation.length();
-        if !norm.is_finite() || (norm - 1.0).abs() > 1e-3 {
-            return Err(ParamError {
-                name: "cloth.rotation",
-                value: format!("{:?} (length {norm})", self.rotation.to_array()),
-                problem: "is not a unit quaternion",
-                range: "a rotation: a quaternion of length 1 (within 1e-3)",
-            });
-        }
+    pub fn validate(&self) -> Result<(), RangeError> {
+        let size = Range::new(1e-3, 1e3).unit(" m");
+        size.check("cloth.width", self.width)?;
+        size.check("cloth.height", self.height)?;
+        let side =
+            Range::new(MIN_RESOLUTION as f32, MAX_RESOLUTION as f32).of("particles per side");
+        side.check_count("cloth.weft", self.weft)?;
+        side.check_count("cloth.warp", self.warp)?;
+        let density = Range::new(1e-4, 1e3).unit(" kg/m²");
+        density.check("cloth.density", self.density)?;
+        Range::new(0.0, 0.1)
+            .unit(" m")
+            .check("cloth.thickness", self.thickness)?;
+        let imperfection = Range::new(0.0, 0.01).unit(" m");
+        imperfection.check("cloth.imperfection", self.imperfection)?;
+        Range::components(1e6).check_each("cloth.origin", &self.origin.to_array())?;
+        Range::components(1e6).check_each("cloth.rotation", &self.rotation.to_array())?;
+        Range::new(1.0 - 1e-3, 1.0 + 1e-3)
+            .of("length")
+            .unit(" (a unit quaternion)")
+            .check("cloth.rotation", self.rotation.length())?;
         Ok(())
     }
 

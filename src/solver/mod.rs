@@ -52,7 +52,9 @@ pub use cloth::{ClothSpec, ClothState};
 pub use collision::{Collider, Pose, Shape};
 pub use diagnostics::{Diagnostics, Violation};
 pub use forced_rotation::ForcedRotation;
-pub use params::{ParamError, Params, REFERENCE_COMPLIANCE, Weights, Width, compliance_factor};
+pub use params::{
+    ParamError, Params, REFERENCE_COMPLIANCE, Range, RangeError, Weights, Width, compliance_factor,
+};
 pub use topology::Topology;
 pub use update::Environment;
 
@@ -338,14 +340,9 @@ impl Solver {
                 bodies: self.bodies.len(),
             });
         }
-        crate::solver::params::check_range(
-            "collider.friction",
-            collider.friction,
-            0.0,
-            10.0,
-            false,
-            "0 ≤ μ ≤ 10",
-        )?;
+        params::Range::new(0.0, 10.0)
+            .of("μ")
+            .check("collider.friction", collider.friction)?;
         self.colliders.push(collider);
         Ok(())
     }

@@ -1,0 +1,112 @@
+//! What a recording carries: the telemetry level, how often frames are
+//! logged, correction arrows and particle colours (the `[telemetry]` table).
+
+use serde::{Deserialize, Serialize};
+
+/// How much telemetry a recording carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Level {
+    /// Static data only: no per-frame entities.
+    Off,
+    /// Scalars and particles.
+    Summary,
+    /// Everything: normals, mesh, corrections, colliders, bodies.
+    #[default]
+    Full,
+}
+
+/// What particles are coloured by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorBy {
+    /// Largest strain of the particle's weft and warp edges.
+    #[default]
+    Strain,
+    /// Speed.
+    Speed,
+    /// Size of the particle's total correction in the last adjust.
+    Correction,
+    /// One colour.
+    None,
+}
+
+/// Telemetry settings (see the README's telemetry section).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TelemetrySettings {
+    /// `off`, `summary` or `full`.
+    pub level: Level,
+    /// Log every N-th frame (≥ 1).
+    pub log_every: u32,
+    /// Corrections smaller than this (metres for δx, radians for δθ) get no arrow.
+    pub arrow_threshold: f32,
+    /// Length multiplier for correction arrows.
+    pub arrow_scale: f32,
+    /// What particles are coloured by.
+    pub color_by: ColorBy,
+    /// Which families' correction arrows are logged (at level `full`).
+    pub corrections: FamilyToggles,
+}
+
+impl Default for TelemetrySettings {
+    fn default() -> Self {
+        Self {
+            level: Level::Full,
+            log_every: 1,
+            arrow_threshold: 1e-5,
+            arrow_scale: 20.0,
+            color_by: ColorBy::Strain,
+            corrections: FamilyToggles::default(),
+        }
+    }
+}
+
+/// One switch per constraint family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FamilyToggles {
+    /// Stretch.
+    pub stretch: bool,
+    /// Planarity.
+    pub planarity: bool,
+    /// Normality.
+    pub normality: bool,
+    /// Curvature.
+    pub curvature: bool,
+}
+
+impl Default for FamilyToggles {
+    fn default() -> Self {
+        Self {
+            stretch: true,
+            planarity: true,
+            normality: true,
+            curvature: true,
+        }
+    }
+}
+
+impl FamilyToggles {
+    /// The switch of one family.
+    pub fn get(&self, f: crate::solver::Family) -> bool {
+        use crate::solver::Family::*;
+        match f {
+            Stretch => self.stretch,
+            Planarity => self.planarity,
+            Normality => self.normality,
+            Curvature => self.curvature,
+        }
+    }
+
+    /// The switch of one family, mutably.
+    pub fn get_mut(&mut self, f: crate::solver::Family) -> &mut bool {
+        use crate::solver::Family::*;
+        match f {
+            Stretch => &mut self.stretch,
+            Planarity => &mut self.planarity,
+            Normality => &mut self.normality,
+            Curvature => &mut self.curvature,
+        }
+    }
+}
