@@ -203,7 +203,8 @@ fn rebuild_figures(rec: &read::Recording) -> Figures {
     let failure = rec
         .events
         .iter()
-        .find(|(_, t)| t.contains("non-finite") || t.contains("step "))
+        // A solver failure's event is the `StepError`: `step N (… phase): …`.
+        .find(|(_, t)| t.starts_with("step "))
         .map(|(_, t)| t.clone());
     Figures {
         preset: String::new(),

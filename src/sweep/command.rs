@@ -192,7 +192,7 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
         if outcome.errors.is_empty() {
             String::new()
         } else {
-            format!(", {} could not be written", outcome.errors.len())
+            format!(", {} could not be run or written", outcome.errors.len())
         },
         out.display()
     );

@@ -293,7 +293,12 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
                 )
             })?;
             if old != *manifest {
-                let what = if old.preset != manifest.preset {
+                let what = if old.weft != manifest.weft {
+                    format!(
+                        "written by weft {}, this is weft {}: its results may differ",
+                        old.weft, manifest.weft
+                    )
+                } else if old.preset != manifest.preset {
                     format!("preset {} instead of {}", old.preset, manifest.preset)
                 } else if old.axes != manifest.axes {
                     "other --set values".to_string()
