@@ -1,4 +1,6 @@
-//! The `weft` command line: list, check, show, record and replay presets.
+//! The `weft` command line: list, check, show, record and replay presets;
+//! compare runs and sweep grids (their options live in `compare::command`
+//! and `sweep::command`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -52,6 +54,10 @@ pub enum Command {
         /// The `.rrd` file written by `weft record`.
         file: PathBuf,
     },
+    /// Compare recorded runs side by side, write a comparison for the viewer, gate on regressions.
+    Compare(crate::compare::command::CompareArgs),
+    /// Run a preset over a grid of settings (resumable, sharded on clusters), or collect one.
+    Sweep(crate::sweep::command::SweepArgs),
 }
 
 /// Options of `weft gui`.
@@ -192,6 +198,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
+        Command::Compare(args) => crate::compare::command::compare(args),
+        Command::Sweep(args) => crate::sweep::command::sweep(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
             if r.truncated {

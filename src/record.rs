@@ -8,14 +8,15 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, Tuning, preset::Expect};
 use crate::solver::{Family, Params, StepError};
 use crate::telemetry::{Telemetry, paths};
 
 /// What a run measured.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Figures {
     /// The preset's name or path.
     pub preset: String,
@@ -44,7 +45,7 @@ pub struct Figures {
 }
 
 /// One `[expect]` bound checked against the figures.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Check {
     /// The bound, as written in the preset (`expect.max_strain`).
     pub bound: String,
