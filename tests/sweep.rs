@@ -125,6 +125,14 @@ fn grid_expands_lists_and_ranges_in_order_with_stable_names() {
         twice[0].name,
         "0_expect.max_violation.stretch=0.1_telemetry.corrections.stretch=true"
     );
+    // Long values are cut, the index keeps names unique.
+    let long = grid::points(&[
+        format!("description={},{}", "a".repeat(300), "b".repeat(300))
+            .parse()
+            .unwrap(),
+    ]);
+    assert!(long.iter().all(|p| p.name.len() == grid::MAX_NAME));
+    assert_ne!(long[0].name, long[1].name);
     // Twelve points: indices padded so names sort in grid order.
     let wide = grid::points(&["solver.iterations=1..12:12".parse().unwrap()]);
     assert_eq!(wide[0].name, "00_iterations=1");

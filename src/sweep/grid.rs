@@ -141,6 +141,9 @@ pub struct Point {
     pub overrides: Vec<Override>,
 }
 
+/// The longest point name (all ASCII), leaving room for `.rrd.part`.
+pub const MAX_NAME: usize = 200;
+
 /// The last segment of a key (`solver.weights.curvature` → `curvature`).
 fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
@@ -197,9 +200,13 @@ pub fn points(axes: &[Axis]) -> Vec<Point> {
                     name += &format!("_{}={}", label(a), a.texts[c]);
                 }
             }
+            // File names have a limit (255 bytes on most file systems); the
+            // index prefix keeps a shortened name unique.
+            let mut name = safe(&name);
+            name.truncate(MAX_NAME);
             Point {
                 index,
-                name: safe(&name),
+                name,
                 settings: axes
                     .iter()
                     .zip(&choice)
