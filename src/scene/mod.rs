@@ -20,11 +20,13 @@ pub mod load;
 pub mod motion;
 pub mod preset;
 pub mod shipped;
+pub mod tuning;
 
 use glam::{Quat, Vec3};
 
 pub use load::{Loaded, Override, PresetError};
 pub use preset::Preset;
+pub use tuning::Tuning;
 
 use crate::solver::{
     Collider, Environment, ParamError, Params, Pose, SetupError, Shape, Solver, StepError,
@@ -139,28 +141,23 @@ impl Scene {
 
     /// Replaces the solver parameters from the next step on.
     pub fn set_params(&mut self, params: Params) -> Result<(), ParamError> {
-        self.solver.set_params(params)?;
-        self.preset.solver = params;
-        Ok(())
-    }
-
-    /// Replaces the wind from the next step on.
-    pub fn set_wind(&mut self, wind: WindSection) {
-        self.preset.environment.wind = wind;
+        self.set_tuning(&Tuning {
+            solver: params,
+            ..self.tuning()
+        })
     }
 
     /// The live-tunable settings: solver parameters and wind.
     pub fn tuning(&self) -> Tuning {
-        Tuning {
-            solver: *self.solver.params(),
-            wind: self.preset.environment.wind,
-        }
+        Tuning::of(&self.preset)
     }
 
-    /// Applies live-tunable settings from the next step on.
+    /// Applies live-tunable settings from the next step on, if they validate
+    /// (else nothing changes).
     pub fn set_tuning(&mut self, tuning: &Tuning) -> Result<(), ParamError> {
-        self.set_params(tuning.solver)?;
-        self.set_wind(tuning.wind);
+        tuning.validate()?;
+        self.solver.set_params(tuning.solver)?;
+        tuning.apply_to(&mut self.preset);
         Ok(())
     }
 
@@ -203,16 +200,6 @@ impl Scene {
     pub fn frames_in(&self, seconds: f32) -> u64 {
         ((seconds / self.solver.params().dt).round() as u64).max(1)
     }
-}
-
-/// What can change while a scene runs, and is recorded whenever it does.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Tuning {
-    /// Solver parameters.
-    pub solver: Params,
-    /// The wind.
-    pub wind: WindSection,
 }
 
 /// The wind at time `t`: the mean velocity, plus gusts along it and a sway of

@@ -221,3 +221,53 @@ pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
     }
     e as f32
 }
+
+/// Per particle, the largest violation of `family` over the constraints
+/// that involve it (pairs: both ends; bend triples: all three), as in
+/// [`violation`]. For inspecting one particle.
+pub fn particle_violation(family: Family, state: &ClothState, topology: &Topology) -> Vec<f32> {
+    let x = &state.position;
+    let normal = |i| state.normal(i);
+    let mut out = vec![0.0f32; state.len()];
+    let mut put = |i: u32, v: f32| {
+        let slot = &mut out[i as usize];
+        *slot = slot.max(v);
+    };
+    match family {
+        Family::Curvature => {
+            for &t in &topology.bend.items {
+                let v = curvature::violation(x, t);
+                put(t.a, v);
+                put(t.mid, v);
+                put(t.b, v);
+            }
+        }
+        _ => {
+            for &p in &topology.structural.items {
+                let v = match family {
+                    Family::Stretch => stretch::violation(x, p),
+                    Family::Planarity => planarity::violation(x, normal, p),
+                    _ => normality::violation(normal, p),
+                };
+                put(p.a, v);
+                put(p.b, v);
+            }
+        }
+    }
+    out
+}
+
+/// Per particle, the largest strain of its weft and warp edges, as in
+/// [`max_strain`] (0 when all are compressed).
+pub fn particle_strain(state: &ClothState, topology: &Topology) -> Vec<f32> {
+    let x = &state.position;
+    let mut out = vec![0.0f32; state.len()];
+    for p in &topology.structural.items {
+        let len = x[p.b as usize].distance(x[p.a as usize]);
+        let s = ((len - p.rest) / p.rest).max(0.0);
+        for i in [p.a as usize, p.b as usize] {
+            out[i] = out[i].max(s);
+        }
+    }
+    out
+}

@@ -62,6 +62,12 @@ pub struct Recording {
     pub summary: Option<String>,
     /// Particle positions at the last logged frame.
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
+    /// Whether the file carries a blueprint (a viewer layout).
+    pub blueprint: bool,
+    /// The recording's properties as text, by `entity:component` under
+    /// `__properties` (`__properties:RecordingInfo:name`,
+    /// `__properties/weft:preset`…).
+    pub properties: BTreeMap<String, String>,
     /// Particle positions at every logged frame.
     pub positions: BTreeMap<i64, Vec<[f32; 3]>>,
     /// Every scalar series (`metrics/…`), by entity path: one sample per
@@ -135,6 +141,7 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
     let mut order = Vec::new();
     let mut failed = false;
     let mut decoded = 0;
+    let mut blueprint = false;
     for msg in decoder.by_ref() {
         let Ok(msg) = msg else {
             failed = true;
@@ -142,6 +149,7 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
         };
         decoded += 1;
         let id = msg.store_id().clone();
+        blueprint |= id.kind() == StoreKind::Blueprint;
         if id.kind() == StoreKind::Recording {
             if !order.contains(&id) {
                 order.push(id);
@@ -171,6 +179,7 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
             let mut rec = recording(&engine);
             rec.id = id.recording_id().to_string();
             rec.truncated = truncated && Some(&id) == last.as_ref();
+            rec.blueprint = blueprint;
             Some(Ok(rec))
         })
         .collect()
@@ -179,10 +188,16 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
 /// Everything weft reads from one recording's store.
 fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
     let mut out = Recording::default();
+    for entity in
+        engine.iter_entity_paths_sorted(&EntityPathFilter::parse_forgiving("+ /__properties/**"))
+    {
+        let path = entity.to_string().trim_start_matches('/').to_string();
+        properties(engine, &entity, &path, &mut out.properties);
+    }
     for entity in engine.iter_entity_paths_sorted(&EntityPathFilter::all()) {
         let path = entity.to_string().trim_start_matches('/').to_string();
         if path.starts_with("__") {
-            continue; // the SDK's own (recording properties)
+            continue; // the SDK's own
         }
         let info = entity_info(engine, &entity, &mut out.sim_time);
         match path.as_str() {
@@ -206,6 +221,28 @@ fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
         out.entities.insert(path, info);
     }
     out
+}
+
+/// The text-valued recording properties of `entity` (the start time, a
+/// timestamp, is left out).
+fn properties(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    path: &str,
+    out: &mut BTreeMap<String, String>,
+) {
+    let schema = engine.schema_for_query(&contents(entity));
+    for c in &schema.components {
+        let name = c.component.as_str();
+        let text = static_value(engine, entity, name).and_then(|list| {
+            let value = list.value(0);
+            let s = value.as_string_opt::<i32>()?;
+            (!s.is_empty()).then(|| s.value(0).to_string())
+        });
+        if let Some(text) = text {
+            out.insert(format!("{path}:{name}"), text);
+        }
+    }
 }
 
 /// An entity's columns, and its rows on the `frame` timeline; notes the

@@ -10,6 +10,7 @@
 use std::{borrow::Cow, collections::HashSet};
 
 use super::{BodySection, Preset, ShapeKind};
+use crate::scene::Tuning;
 use crate::solver::{Family, Range, RangeError};
 
 /// A semantic problem, at a dotted key path.
@@ -61,7 +62,6 @@ impl Preset {
         POSITION.check_each("cloth.position", &cloth.position.to_array())?;
         EULER.check_each("cloth.rotation", &cloth.rotation)?;
         cloth.spec().validate()?;
-        self.solver.validate().map_err(|e| e.under("solver."))?;
         let env = &self.environment;
         let gravity = Range::components(1e4).unit(" m/s²");
         gravity.check_each("environment.gravity", &env.gravity.to_array())?;
@@ -70,15 +70,8 @@ impl Preset {
         let drag = Range::new(0.0, 10.0);
         drag.check("environment.drag_normal", env.drag_normal)?;
         drag.check("environment.drag_tangent", env.drag_tangent)?;
-        let wind = &env.wind;
-        let velocity = Range::components(1e3).unit(" m/s");
-        velocity.check_each("environment.wind.velocity", &wind.velocity.to_array())?;
-        let gust = Range::new(0.0, 1e3).unit(" m/s");
-        gust.check("environment.wind.gust", wind.gust)?;
-        let period = Range::new(0.0, 1e4).unit(" s");
-        period.check("environment.wind.gust_period", wind.gust_period)?;
-        let sway = Range::new(0.0, 180.0).unit("°");
-        sway.check("environment.wind.sway", wind.sway)?;
+        // The solver parameters and the wind: what may change while it runs.
+        Tuning::of(self).validate()?;
         let mut names = HashSet::new();
         for (b, body) in self.bodies.iter().enumerate() {
             if !names.insert(body.name.as_str()) {
