@@ -140,8 +140,8 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
     let mut messages = Vec::new();
     let mut order = Vec::new();
     let mut failed = false;
-    let mut blueprint = false;
     let mut decoded = 0;
+    let mut blueprint = false;
     for msg in decoder.by_ref() {
         let Ok(msg) = msg else {
             failed = true;
