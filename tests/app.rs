@@ -12,6 +12,7 @@ use weft::app::{
     session::{Command, Session},
 };
 use weft::scene::load;
+use weft::solver::Family;
 use weft::telemetry::{paths, read};
 
 struct State {
@@ -107,7 +108,10 @@ fn a_slider_changes_the_solver_and_the_recording() {
     click(&mut h, "Step");
     assert!(h.state().session.wait_for(WAIT, |s| s.frame == 3));
     let status = h.state().session.status();
-    assert_eq!(status.preset.unwrap().solver.weights.curvature, 0.35);
+    assert_eq!(
+        status.preset.unwrap().solver.weights[Family::Curvature],
+        0.35
+    );
 
     h.run();
     click(&mut h, "Stop recording");
@@ -155,7 +159,10 @@ fn a_rejected_value_shows_its_message_and_changes_nothing() {
     h.get_by_label_contains("solver.weights.curvature");
     h.get_by_label_contains("out of range");
     let status = h.state().session.status();
-    assert_eq!(status.preset.unwrap().solver.weights.curvature, 0.1);
+    assert_eq!(
+        status.preset.unwrap().solver.weights[Family::Curvature],
+        0.1
+    );
 
     // The free-form field validates like --set, suggesting the nearest key.
     let field = h
@@ -168,14 +175,7 @@ fn a_rejected_value_shows_its_message_and_changes_nothing() {
     click(&mut h, "Apply");
     h.get_by_label_contains("did you mean `curvature`");
     assert_eq!(
-        h.state()
-            .session
-            .status()
-            .preset
-            .unwrap()
-            .solver
-            .weights
-            .curvature,
+        h.state().session.status().preset.unwrap().solver.weights[Family::Curvature],
         0.1
     );
 }
@@ -200,7 +200,7 @@ fn saving_a_preset_loads_back_identically() {
     let saved = load::load(path.to_str().unwrap(), &[]).unwrap().preset;
     let live = h.state().session.status().preset.unwrap();
     assert_eq!(saved, live);
-    assert_eq!(saved.solver.weights.normality, 0.45);
+    assert_eq!(saved.solver.weights[Family::Normality], 0.45);
     assert_eq!(saved.solver.iterations, 7);
 }
 

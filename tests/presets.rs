@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use weft::scene::{Scene, load, shipped};
-use weft::solver::Shape;
+use weft::solver::{Family, Shape};
 
 fn loaded(name: &str) -> load::Loaded {
     load::load(name, &[]).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -236,8 +236,8 @@ fn extend_and_set_round_trip() {
     let p = &loaded.preset;
     assert_eq!(p.description, "child");
     assert_eq!((p.cloth.weft, p.cloth.warp, p.cloth.width), (6, 5, 2.5));
-    assert_eq!(p.solver.weights.curvature, 0.3);
-    assert_eq!(p.solver.weights.normality, 0.7);
+    assert_eq!(p.solver.weights[Family::Curvature], 0.3);
+    assert_eq!(p.solver.weights[Family::Normality], 0.7);
     assert_eq!(p.solver.iterations, 12);
     assert_eq!(p.telemetry.level, weft::scene::preset::Level::Summary);
     // The resolved text stands alone and loads back to the same preset.

@@ -18,7 +18,7 @@ use rerun::sink::FileSink;
 
 use crate::record::Run;
 use crate::scene::{Loaded, Scene, Tuning, preset::TelemetrySettings};
-use crate::solver::Family;
+use crate::solver::PerFamily;
 use crate::telemetry::{Telemetry, blueprint};
 
 /// What the panel asks of the session.
@@ -65,8 +65,8 @@ pub struct Status {
     pub steps_per_second: f32,
     /// Wall time of the last step, in milliseconds.
     pub step_ms: f32,
-    /// Violation after the last step, per family (in [`Family::ALL`] order).
-    pub max_violation: [f32; 4],
+    /// Violation after the last step, per family.
+    pub max_violation: PerFamily<f32>,
     /// Largest edge strain after the last step.
     pub max_strain: f32,
     /// The recording file, while recording.
@@ -432,7 +432,7 @@ impl Worker {
         s.speed = self.speed;
         s.steps_per_second = self.recent.len() as f32;
         if let Some(d) = scene.solver().diagnostics() {
-            s.max_violation = Family::ALL.map(|f| d.family(f).violation.max);
+            s.max_violation = d.families.map(|_, f| f.violation.max);
             s.max_strain = d.max_strain;
         }
     }

@@ -154,7 +154,7 @@ mod tests {
         let before = scene.tuning();
         let mut bad = before;
         bad.wind.sway = 400.0;
-        bad.solver.weights.curvature = 0.3;
+        bad.solver.weights[crate::solver::Family::Curvature] = 0.3;
         let e = scene.set_tuning(&bad).unwrap_err();
         assert_eq!(e.key, "environment.wind.sway");
         assert_eq!(scene.tuning(), before, "nothing applied");

@@ -65,7 +65,7 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
             None => vec![Color::from_rgb(220, 200, 160); n],
             Some(d) => (0..n)
                 .map(|i| {
-                    let total: f32 = d.families.iter().map(|f| f.dx[i].length()).sum();
+                    let total: f32 = d.families.iter().map(|(_, f)| f.dx[i].length()).sum();
                     ramp(total / 1e-3)
                 })
                 .collect(),

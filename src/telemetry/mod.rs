@@ -406,7 +406,7 @@ impl Telemetry {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
-            let shown = self.settings.corrections.get(f);
+            let shown = self.settings.corrections[f];
             for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
                 // A family switched off logs empty arrows, clearing its old ones.
                 let (origins, arrows): (Vec<Vec3>, Vec<Vec3>) = vectors
