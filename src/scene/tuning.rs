@@ -8,13 +8,14 @@
 //!
 //! ```
 //! use weft::scene::{Tuning, load};
+//! use weft::solver::Family;
 //!
 //! let mut preset = load::load("flag_on_car", &[]).unwrap().preset;
 //! let mut tuning = Tuning::of(&preset);
-//! tuning.solver.weights.curvature = 0.35;
+//! tuning.solver.weights[Family::Curvature] = 0.35;
 //! tuning.validate().unwrap();
 //! tuning.apply_to(&mut preset);
-//! assert_eq!(preset.solver.weights.curvature, 0.35);
+//! assert_eq!(preset.solver.weights[Family::Curvature], 0.35);
 //! assert!(Tuning::is_live("solver.weights.curvature"));
 //! assert!(!Tuning::is_live("cloth.weft"));
 //! ```

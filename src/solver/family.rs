@@ -178,15 +178,35 @@ impl<T> PerFamily<T> {
                 write!(f, "a table with keys among {}", Family::NAMES.join(", "))
             }
             fn visit_map<A: MapAccess<'de>>(mut self, mut map: A) -> Result<Self::Value, A::Error> {
-                while let Some(key) = map.next_key::<String>()? {
-                    let family = Family::from_name(&key)
-                        .ok_or_else(|| de::Error::unknown_field(&key, &Family::NAMES))?;
+                while let Some(Key(family)) = map.next_key()? {
                     self.0[family] = map.next_value()?;
                 }
                 Ok(self.0)
             }
         }
         d.deserialize_map(Over(base))
+    }
+}
+
+/// A family's name as a table key: an unknown one is refused while the key
+/// is read (as a struct's unknown field is), so the error's path ends in it.
+struct Key(Family);
+
+impl<'de> Deserialize<'de> for Key {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Name;
+        impl Visitor<'_> for Name {
+            type Value = Key;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "one of {}", Family::NAMES.join(", "))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Key, E> {
+                Family::from_name(v)
+                    .map(Key)
+                    .ok_or_else(|| E::unknown_field(v, &Family::NAMES))
+            }
+        }
+        d.deserialize_identifier(Name)
     }
 }
 
