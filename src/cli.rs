@@ -1,4 +1,6 @@
-//! The `weft` command line: list, check, show, record and replay presets.
+//! The `weft` command line: list, check, show, record and replay presets;
+//! compare runs and sweep grids (their options live in `compare::command`
+//! and `sweep::command`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,11 +27,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Open the desktop debugger: the Rerun viewer and a tuning panel in one window.
-    Gui {
-        /// Preset file or shipped preset name.
-        #[arg(default_value = "flag_on_car")]
-        preset: String,
-    },
+    Gui(GuiArgs),
     /// List the shipped presets with a one-line description each.
     Presets,
     /// Validate preset files (or shipped names); exits non-zero if any is invalid.
@@ -56,6 +54,28 @@ pub enum Command {
         /// The `.rrd` file written by `weft record`.
         file: PathBuf,
     },
+    /// Compare recorded runs side by side, write a comparison for the viewer, gate on regressions.
+    Compare(crate::compare::command::CompareArgs),
+    /// Run a preset over a grid of settings (resumable, sharded on clusters), or collect one.
+    Sweep(crate::sweep::command::SweepArgs),
+}
+
+/// Options of `weft gui`.
+#[derive(Debug, Args)]
+pub struct GuiArgs {
+    /// Preset file or shipped preset name.
+    #[arg(default_value = "flag_on_car")]
+    pub preset: String,
+    /// Override a preset field, e.g. `--set solver.weights.curvature=0.3`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<Override>,
+    /// Play `--frames` frames, save a screenshot of the whole window to
+    /// this PNG file, and quit (for checking the window, e.g. under Xvfb).
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
+    /// Frames to play before the screenshot.
+    #[arg(long, value_name = "N", default_value_t = 60, requires = "screenshot")]
+    pub frames: u64,
 }
 
 /// Options of `weft record`.
@@ -129,11 +149,14 @@ impl RecordArgs {
 
 /// Runs a parsed command line; returns the process exit code.
 pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
-    let command = cli.command.unwrap_or(Command::Gui {
+    let command = cli.command.unwrap_or(Command::Gui(GuiArgs {
         preset: "flag_on_car".into(),
-    });
+        set: Vec::new(),
+        screenshot: None,
+        frames: 60,
+    }));
     match command {
-        Command::Gui { preset } => gui(&preset),
+        Command::Gui(args) => gui(args),
         Command::Presets => {
             let width = shipped::ALL.iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in shipped::ALL {
@@ -175,6 +198,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
+        Command::Compare(args) => crate::compare::command::compare(args),
+        Command::Sweep(args) => crate::sweep::command::sweep(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
             if r.truncated {
@@ -209,13 +234,17 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
 }
 
 #[cfg(feature = "viewer")]
-fn gui(preset: &str) -> anyhow::Result<ExitCode> {
-    crate::app::run(preset)?;
+fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
+    let screenshot = args.screenshot.map(|path| crate::app::Screenshot {
+        path,
+        frames: args.frames,
+    });
+    crate::app::run(&args.preset, &args.set, screenshot)?;
     Ok(ExitCode::SUCCESS)
 }
 
 #[cfg(not(feature = "viewer"))]
-fn gui(_preset: &str) -> anyhow::Result<ExitCode> {
+fn gui(_args: GuiArgs) -> anyhow::Result<ExitCode> {
     anyhow::bail!(
         "this weft was built without the desktop debugger (feature `viewer`); rebuild with default features"
     )

@@ -6,6 +6,8 @@
 //! - [`telemetry`]: streams a scene to Rerun; reads recordings back.
 //! - [`record`], [`replay`]: headless runs with CI verdicts, and their
 //!   bit-for-bit reproduction.
+//! - [`compare`], [`sweep`]: recorded runs side by side, and grids of runs
+//!   (also sharded over a batch engine's array jobs).
 //! - [`cli`]: the `weft` command line.
 //! - `app` (feature `viewer`, on by default): the desktop debugger, the Rerun
 //!   viewer embedded beside an egui tuning panel.
@@ -15,8 +17,10 @@
 #[cfg(feature = "viewer")]
 pub mod app;
 pub mod cli;
+pub mod compare;
 pub mod record;
 pub mod replay;
 pub mod scene;
 pub mod solver;
+pub mod sweep;
 pub mod telemetry;

@@ -8,14 +8,15 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, Tuning, preset::Expect};
 use crate::solver::{Family, Params, StepError};
 use crate::telemetry::{Telemetry, paths};
 
 /// What a run measured.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Figures {
     /// The preset's name or path.
     pub preset: String,
@@ -44,7 +45,7 @@ pub struct Figures {
 }
 
 /// One `[expect]` bound checked against the figures.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Check {
     /// The bound, as written in the preset (`expect.max_strain`).
     pub bound: String,
@@ -121,7 +122,8 @@ pub struct Run {
 }
 
 impl Run {
-    /// Starts a run: logs static data, the initial parameters and frame 0.
+    /// Starts a run: logs static data, the initial parameters and the
+    /// scene's current frame (frame 0 for a new scene).
     pub fn start(
         mut scene: Scene,
         telemetry: Telemetry,
@@ -147,7 +149,8 @@ impl Run {
         };
         run.telemetry.log_static(&run.scene, resolved)?;
         let tuning = run.scene.tuning();
-        run.telemetry.log_tuning(0, 0.0, &tuning)?;
+        let (frame, time) = (run.scene.frame(), run.scene.time());
+        run.telemetry.log_tuning(frame, time, &tuning)?;
         run.telemetry.log_frame(&run.scene)?;
         Ok(run)
     }
@@ -183,23 +186,33 @@ impl Run {
     }
 
     fn measure(&mut self) {
-        let solver = self.scene.solver();
-        let f = &mut self.figures;
-        let (strain, violations) = match solver.diagnostics() {
-            Some(d) => (
-                d.max_strain,
-                Family::ALL.map(|fam| d.family(fam).violation.max),
-            ),
-            None => (
-                solver.max_strain(),
-                Family::ALL.map(|fam| solver.violation(fam).max),
-            ),
-        };
-        f.max_strain = f.max_strain.max(strain);
-        for (fam, v) in Family::ALL.iter().zip(violations) {
-            let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
-            *slot = slot.max(v);
+        measure(&mut self.figures, self.scene.solver());
+    }
+
+    /// A copy of the run's state (scene and figures), to resume from later.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            scene: self.scene.clone(),
+            figures: self.figures.clone(),
         }
+    }
+
+    /// Continues a run from `snapshot` into new telemetry: logs the static
+    /// data, the tuning and the snapshot's frame, as [`Run::start`] does at
+    /// frame 0. Its figures go on from the snapshot's.
+    pub fn resume(
+        snapshot: Snapshot,
+        telemetry: Telemetry,
+        name: &str,
+        resolved: &str,
+    ) -> Result<Self, RunError> {
+        let Snapshot { scene, figures } = snapshot;
+        let mut run = Self::start(scene, telemetry, name, resolved)?;
+        run.figures = Figures {
+            preset: name.to_string(),
+            ..figures
+        };
+        Ok(run)
     }
 
     /// Steps `frames` frames, or until `stop` is set; `tick` is called after each.
@@ -253,6 +266,43 @@ impl Run {
         let figures = self.log_summary()?;
         self.telemetry.flush().ok();
         Ok(figures)
+    }
+}
+
+/// A run's state at one frame: the scene and the figures so far.
+#[derive(Clone, Debug)]
+pub struct Snapshot {
+    /// The scene.
+    pub scene: Scene,
+    figures: Figures,
+}
+
+impl Snapshot {
+    /// Steps one frame without logging, keeping the figures exactly as
+    /// [`Run::step`] would.
+    pub fn advance(&mut self) -> Result<(), StepError> {
+        self.scene.step()?;
+        measure(&mut self.figures, self.scene.solver());
+        Ok(())
+    }
+}
+
+/// Folds the solver's state after a step into the running figures.
+fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
+    let (strain, violations) = match solver.diagnostics() {
+        Some(d) => (
+            d.max_strain,
+            Family::ALL.map(|fam| d.family(fam).violation.max),
+        ),
+        None => (
+            solver.max_strain(),
+            Family::ALL.map(|fam| solver.violation(fam).max),
+        ),
+    };
+    f.max_strain = f.max_strain.max(strain);
+    for (fam, v) in Family::ALL.iter().zip(violations) {
+        let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
+        *slot = slot.max(v);
     }
 }
 

@@ -9,7 +9,7 @@ use egui::accesskit::{Action, ActionData, ActionRequest};
 use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
 use weft::app::{
     panel::Panel,
-    session::{Command, Session},
+    session::{BranchAt, Command, Session},
 };
 use weft::scene::load;
 use weft::solver::Family;
@@ -245,5 +245,546 @@ fn switching_to_level_full_draws_the_corrections() {
     assert!(
         arrows.last().is_some_and(|&n| n > 0),
         "no stretch corrections drawn after switching to full: {arrows:?}"
+    );
+}
+
+/// Every start (open, Reset, Record, Branch) is a new Rerun recording with
+/// its own id, a readable name and properties; a session file holds
+/// exactly one run, with weft's blueprint, and replays bit for bit.
+#[test]
+fn each_run_is_its_own_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("session.rrd");
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(std::collections::BTreeSet::new()));
+    let sink = seen.clone();
+    let overrides = ["solver.weights.curvature=0.35".parse().unwrap()];
+    let loaded = load::load("hanging_sheet", &overrides).unwrap();
+    let session = Session::start(
+        loaded,
+        "hanging_sheet".into(),
+        move |msg: &rerun::log::LogMsg| {
+            let id = msg.store_id();
+            if id.is_recording() {
+                sink.lock().unwrap().insert(id.recording_id().to_string());
+            }
+        },
+    )
+    .unwrap();
+    let first = session.status().run;
+    assert_eq!(first.number, 1);
+    assert_eq!(first.name, "#1 hanging_sheet · curvature 0.1→0.35");
+    session.send(Command::Step);
+    assert!(session.wait_for(WAIT, |s| s.frame == 1));
+    session.send(Command::Reset);
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2 && s.frame == 0));
+    session.send(Command::StartRecording(file.clone()));
+    assert!(session.wait_for(WAIT, |s| s.recording.is_some()));
+    let recorded = session.status().run;
+    assert_eq!(recorded.number, 3);
+    for frame in 1..=3 {
+        session.send(Command::Step);
+        assert!(session.wait_for(WAIT, |s| s.frame == frame));
+    }
+    // A reset while recording ends the file: it holds one run.
+    session.send(Command::Reset);
+    assert!(session.wait_for(WAIT, |s| s.run.number == 4 && s.recording.is_none()));
+    let status = session.status();
+    let ids: Vec<&str> = status
+        .runs
+        .iter()
+        .map(|r| r.recording_id.as_str())
+        .collect();
+    assert_eq!(ids.len(), 4);
+    assert_eq!(
+        ids.iter().collect::<std::collections::BTreeSet<_>>().len(),
+        4,
+        "each run has its own recording id: {ids:?}"
+    );
+    drop(session);
+    // The viewer got all four recordings.
+    assert_eq!(seen.lock().unwrap().len(), 4);
+
+    let all = read::read_all(&file).unwrap();
+    assert_eq!(all.len(), 1, "one run per file");
+    let rec = all.into_iter().next().unwrap();
+    assert_eq!(rec.id, recorded.recording_id);
+    assert!(!rec.truncated);
+    assert!(rec.blueprint, "the file carries weft's blueprint");
+    assert_eq!(rec.frames(paths::PARTICLES), vec![0, 1, 2, 3]);
+    let prop = |k: &str| rec.properties.get(k).cloned().unwrap_or_default();
+    assert_eq!(
+        prop("__properties:RecordingInfo:name"),
+        recorded.name,
+        "{:?}",
+        rec.properties
+    );
+    assert_eq!(prop("__properties/weft:preset"), "hanging_sheet");
+    assert_eq!(prop("__properties/weft:version"), env!("CARGO_PKG_VERSION"));
+    assert_eq!(prop("__properties/weft:changes"), "curvature 0.1→0.35");
+    assert_eq!(prop("__properties/result:frames"), "3");
+    assert_eq!(prop("__properties/result:verdict"), "ok");
+    let replayed = weft::replay::replay(&file).unwrap();
+    assert!(replayed.reproduced(), "{replayed:?}");
+    assert_eq!(
+        prop("__properties/result:final_state"),
+        replayed.digest,
+        "{:?}",
+        rec.properties
+    );
+}
+
+/// Branching resumes from the nearest checkpoint and steps silently to the
+/// frame: bit-identical to the parent there, and after it as long as the
+/// tuning is the same; a new recording names its parent and frame.
+#[test]
+fn a_branch_is_bit_identical_up_to_its_frame() {
+    let loaded = load::load("hanging_sheet", &[]).unwrap();
+    let session = Session::start(loaded, "hanging_sheet".into(), |_| {}).unwrap();
+    let step_to = |frame: u64| {
+        let now = session.status().frame;
+        for _ in now..frame {
+            session.send(Command::Step);
+        }
+        assert!(session.wait_for(WAIT, |s| s.frame == frame));
+        session.status().digest
+    };
+    let at_45 = step_to(45);
+    let tuning =
+        |s: &weft::app::session::Status| weft::scene::Tuning::of(s.preset.as_ref().unwrap());
+    // A change at frame 50 is part of the parent's story, replayed too.
+    step_to(49);
+    let mut t = tuning(&session.status());
+    t.solver.weights[Family::Normality] = 0.4;
+    session.send(Command::Tune(t));
+    let at_55 = step_to(55);
+    let at_100 = step_to(100);
+    let parent = session.status().run;
+    assert_eq!(session.status().checkpoints, (4, 30));
+
+    // From checkpoint 30 through the change at 50 to 55.
+    session.send(Command::Branch(BranchAt::Frame(55)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let s = session.status();
+    assert_eq!((s.frame, &s.digest), (55, &at_55), "the state at frame 55");
+    assert_eq!(
+        s.run.parent,
+        Some((1, parent.recording_id.clone(), 55)),
+        "{:?}",
+        s.run
+    );
+    assert!(
+        s.run.name.ends_with("branch of #1 at frame 55"),
+        "{}",
+        s.run.name
+    );
+    assert_eq!(step_to(100), at_100, "the same tuning gives the same run");
+
+    // A branch of the branch, before the tuning change.
+    session.send(Command::Branch(BranchAt::Frame(45)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 3 && s.frame == 45));
+    assert_eq!(session.status().digest, at_45);
+
+    // Higher curvature from frame 60: a different run after it.
+    step_to(60);
+    let mut t = tuning(&session.status());
+    t.solver.weights[Family::Curvature] = 0.35;
+    session.send(Command::Tune(t));
+    session.send(Command::Branch(BranchAt::Frame(60)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 4 && s.frame == 60));
+    assert!(
+        session.status().run.name.contains("curvature 0.1→0.35"),
+        "{}",
+        session.status().run.name
+    );
+    assert_ne!(step_to(100), at_100);
+
+    // Past the run's last frame: refused, with the reason.
+    session.send(Command::Branch(BranchAt::Frame(5000)));
+    assert!(session.wait_for(WAIT, |s| {
+        s.error
+            .as_deref()
+            .is_some_and(|e| e.contains("cannot branch at frame 5000"))
+    }));
+    assert_eq!(session.status().run.number, 4);
+}
+
+/// Checkpoints stay bounded however long the run: at most `MAX`, the
+/// interval doubling, and any frame reachable.
+#[test]
+fn checkpoints_are_bounded() {
+    use weft::app::history::{EVERY, History, MAX};
+    let overrides = [
+        "cloth.weft=4".parse().unwrap(),
+        "cloth.warp=4".parse().unwrap(),
+    ];
+    let loaded = load::load("hanging_sheet", &overrides).unwrap();
+    let scene = weft::scene::Scene::new(&loaded.preset).unwrap();
+    let telemetry = weft::telemetry::Telemetry::new(
+        rerun::RecordingStream::disabled(),
+        loaded.preset.telemetry,
+    );
+    let mut run = weft::record::Run::start(scene, telemetry, "x", &loaded.resolved).unwrap();
+    let mut history = History::new(run.snapshot(), run.scene.tuning());
+    let frames = EVERY * MAX as u64 * 3;
+    let mut digests = vec![run.scene.solver().state().digest()];
+    for frame in 1..=frames {
+        run.step().unwrap();
+        history.stepped(frame, run.scene.time(), || run.snapshot());
+        digests.push(run.scene.solver().state().digest());
+        assert!(history.checkpoints().0 <= MAX);
+    }
+    let (count, every) = history.checkpoints();
+    assert_eq!(every, EVERY * 4);
+    assert!(count > MAX / 2, "{count}");
+    for frame in [0, 1, 59, 777, frames - 1, frames] {
+        let s = history.state_at(frame).unwrap();
+        assert_eq!(s.scene.frame(), frame);
+        assert_eq!(s.scene.solver().state().digest(), digests[frame as usize]);
+    }
+    assert_eq!(history.frame_at(run.scene.time()), frames);
+}
+
+fn press(h: &mut Harness<'_, State>, key: egui::Key) {
+    h.key_press(key);
+    h.run();
+}
+
+/// F6 play/pause, F7 step, F8 branch, F9 reset; the buttons' tooltips say so.
+#[test]
+fn shortcuts_drive_the_simulation() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    press(&mut h, egui::Key::F7);
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 1));
+    press(&mut h, egui::Key::F6);
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.playing && s.frame > 3)
+    );
+    h.run();
+    press(&mut h, egui::Key::F6);
+    assert!(h.state().session.wait_for(WAIT, |s| !s.playing));
+    press(&mut h, egui::Key::F8);
+    assert!(h.state().session.wait_for(WAIT, |s| s.run.number == 2));
+    press(&mut h, egui::Key::F9);
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 3 && s.frame == 0)
+    );
+    h.run();
+    h.get_by_label("Step").hover();
+    h.run();
+    h.get_by_label_contains("(F7)");
+}
+
+/// The viewer's time cursor on the current run is the branch point.
+#[test]
+fn the_viewer_time_cursor_picks_the_branch_frame() {
+    let s = state("hanging_sheet");
+    let link = s.panel.link();
+    let mut h = harness(s);
+    h.run();
+    for _ in 0..30 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 30));
+    h.run();
+    let id = h.state().session.status().run.recording_id;
+    let dt = h.state().session.status().preset.unwrap().solver.dt as f64;
+    // The viewer reports sim_time in nanoseconds.
+    link.lock().unwrap().time(id, 12.0 * dt * 1e9);
+    h.run();
+    click(&mut h, "Branch");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 2 && s.frame == 12),
+        "{:?}",
+        h.state().session.status().frame
+    );
+}
+
+/// Selecting a particle in the 3D view shows its numbers in the panel; the
+/// same numbers are logged per particle on the particles entity.
+#[test]
+fn the_inspector_shows_the_selected_particle() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("session.rrd");
+    let s = state("flag_on_car");
+    let link = s.panel.link();
+    let mut h = harness(s);
+    h.run();
+    h.state()
+        .session
+        .send(Command::StartRecording(file.clone()));
+    assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_some()));
+    for _ in 0..5 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 5));
+    let status = h.state().session.status();
+    let weft_n = status.preset.as_ref().unwrap().cloth.weft as usize;
+    // The flag's free tip: the last particle of the first row.
+    let tip = weft_n - 1;
+    link.lock().unwrap().select(status.run.recording_id, tip);
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.particle.as_ref().is_some_and(|p| p.index == tip)
+    }));
+    h.run();
+    let p = h.state().session.status().particle.unwrap();
+    assert_eq!(p.cell, (tip as u32, 0));
+    assert!(p.dx.iter().any(|(_, d)| d.length() > 0.0), "{p:?}");
+    h.get_by_label_contains(&format!("(i, j) = ({tip}, 0)"));
+    h.get_by_label("|δx| (mm)");
+    h.state().session.send(Command::StopRecording);
+    assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_none()));
+
+    let rec = read::read(&file).unwrap();
+    let components = &rec.entities[paths::PARTICLES].components;
+    for c in [
+        "i",
+        "j",
+        "strain",
+        "violation_planarity",
+        "dx_curvature",
+        "dtheta_normality",
+    ] {
+        assert!(components.contains(c), "{c} not in {components:?}");
+    }
+}
+
+/// The panel shows each [expect] bound with the run's value and ok/FAIL,
+/// live, and starts over with the run.
+#[test]
+fn live_verdicts() {
+    let overrides = ["expect.max_strain=0.0001".parse().unwrap()];
+    let loaded = load::load("flag_on_car", &overrides).unwrap();
+    let session = Session::start(loaded, "flag_on_car".into(), |_| {}).unwrap();
+    let panel = Panel::new(&session.status());
+    let mut h = harness(State { panel, session });
+    h.run();
+    h.get_by_label("max_strain");
+    assert!(h.query_all_by_label("FAIL").next().is_none());
+    for _ in 0..30 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 30));
+    h.run();
+    let checks = h.state().session.status().checks;
+    let strain = checks
+        .iter()
+        .find(|c| c.bound == "expect.max_strain")
+        .unwrap();
+    assert!(!strain.ok && strain.value > 1e-4, "{strain:?}");
+    h.get_by_label("FAIL");
+    click(&mut h, "Reset");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 2 && s.checks.iter().all(|c| c.ok))
+    );
+}
+
+/// "Save preset" writes `extend` plus only what changed, and it loads back
+/// identical to the running preset.
+#[test]
+fn saving_writes_a_small_preset_that_extends_the_shipped_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tuned.toml");
+    let mut s = state("flag_on_car");
+    s.panel.set_save_path(path.to_str().unwrap());
+    let mut h = harness(s);
+    h.run();
+    set_slider(&mut h, "λ curvature", 0.35);
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.preset.as_ref().unwrap().solver.weights[Family::Curvature] == 0.35
+    }));
+    click(&mut h, "Save preset");
+    h.get_by_label_contains("saved");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let body: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .collect();
+    assert_eq!(
+        body,
+        vec![
+            "extend = \"flag_on_car\"",
+            "[solver.weights]",
+            "curvature = 0.35"
+        ],
+        "{text}"
+    );
+    let saved = load::load(path.to_str().unwrap(), &[]).unwrap().preset;
+    assert_eq!(saved, h.state().session.status().preset.unwrap());
+}
+
+/// `color_by = "correction.<family>"` colours by that family alone.
+#[test]
+fn colour_by_one_family() {
+    use weft::scene::preset::ColorBy;
+    let set = |v: &str| vec![format!("telemetry.color_by={v}").parse().unwrap()];
+    let loaded = load::load("flag_on_car", &set("correction.planarity")).unwrap();
+    assert_eq!(
+        loaded.preset.telemetry.color_by,
+        ColorBy::CorrectionPlanarity
+    );
+    let mut scene = weft::scene::Scene::new(&loaded.preset).unwrap();
+    scene.solver_mut().set_diagnostics(true);
+    for _ in 0..10 {
+        scene.step().unwrap();
+    }
+    let colours = |by| weft::telemetry::color::particles(by, &scene);
+    let all = colours(ColorBy::Correction);
+    let families: Vec<_> = [
+        ColorBy::CorrectionStretch,
+        ColorBy::CorrectionPlanarity,
+        ColorBy::CorrectionNormality,
+        ColorBy::CorrectionCurvature,
+    ]
+    .into_iter()
+    .map(colours)
+    .collect();
+    for f in &families {
+        assert_ne!(f, &all);
+    }
+    assert_ne!(families[1], families[3]);
+    let err = load::load("flag_on_car", &set("correction.twist")).unwrap_err();
+    assert!(err.to_string().contains("correction.planarity"), "{err}");
+}
+
+/// A branch's plots show its parent's curves beside its own.
+#[test]
+fn a_branch_draws_its_parent_beside_it() {
+    type Rows = std::collections::BTreeMap<(String, String), usize>;
+    let rows = std::sync::Arc::new(std::sync::Mutex::new(Rows::new()));
+    let sink = rows.clone();
+    let loaded = load::load("hanging_sheet", &[]).unwrap();
+    let session = Session::start(
+        loaded,
+        "hanging_sheet".into(),
+        move |msg: &rerun::log::LogMsg| {
+            if let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg
+                && store.is_recording()
+            {
+                let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
+                let key = (
+                    store.recording_id().to_string(),
+                    chunk.entity_path().to_string(),
+                );
+                *sink.lock().unwrap().entry(key).or_default() += chunk.num_rows();
+            }
+        },
+    )
+    .unwrap();
+    for _ in 0..10 {
+        session.send(Command::Step);
+    }
+    assert!(session.wait_for(WAIT, |s| s.frame == 10));
+    session.send(Command::Branch(BranchAt::Frame(5)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let branch = session.status().run.recording_id;
+    drop(session);
+    let rows = rows.lock().unwrap();
+    let count = |path: &str| rows.get(&(branch.clone(), path.to_string())).copied();
+    // The series style (static) and the parent's ten frames.
+    assert_eq!(count("/metrics/strain/parent"), Some(11), "{rows:?}");
+    assert_eq!(count("/metrics/violation/curvature/parent"), Some(11));
+}
+
+/// A preset file as the base: named relative to the saved file when they
+/// share a directory, else by its absolute path; both load back.
+#[test]
+fn saving_as_a_diff_of_a_preset_file() {
+    use weft::app::preset_diff::as_extension;
+    let dir = tempfile::tempdir().unwrap();
+    let base_path = dir.path().join("base.toml");
+    std::fs::write(
+        &base_path,
+        "extend = \"hanging_sheet\"\ndescription = \"mine\"\n",
+    )
+    .unwrap();
+    let base_arg = base_path.to_str().unwrap();
+    let base = load::load(base_arg, &[]).unwrap().preset;
+    let tuned = load::load(base_arg, &["solver.iterations=7".parse().unwrap()])
+        .unwrap()
+        .preset;
+    let near = dir.path().join("tuned.toml");
+    let text = as_extension("saved", base_arg, &base, &tuned, &near).unwrap();
+    assert!(text.contains("extend = \"base.toml\""), "{text}");
+    std::fs::write(&near, &text).unwrap();
+    assert_eq!(
+        load::load(near.to_str().unwrap(), &[]).unwrap().preset,
+        tuned
+    );
+
+    let other = tempfile::tempdir().unwrap();
+    let far = other.path().join("tuned.toml");
+    let text = as_extension("saved", base_arg, &base, &tuned, &far).unwrap();
+    let abs = std::fs::canonicalize(&base_path).unwrap();
+    assert!(
+        text.contains(&format!("extend = \"{}\"", abs.display())),
+        "{text}"
+    );
+    std::fs::write(&far, &text).unwrap();
+    assert_eq!(
+        load::load(far.to_str().unwrap(), &[]).unwrap().preset,
+        tuned
+    );
+}
+
+/// The viewer's events reach the panel: a particle clicked in the 3D view,
+/// the time cursor on `sim_time` (nanoseconds) and on `frame`.
+#[test]
+fn viewer_events_reach_the_panel() {
+    use re_viewer::external::re_log_types::{EntityPath, Instance, TimeReal};
+    use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
+    let link = std::sync::Mutex::new(weft::app::panel::ViewerLink::default());
+    let event = |kind| ViewerEvent {
+        application_id: "weft".into(),
+        recording_id: "rec_1".into(),
+        segment_id: None,
+        kind,
+    };
+    let click = |path: &str, instance: u64| {
+        event(ViewerEventKind::SelectionChange {
+            items: vec![SelectionChangeItem::Entity {
+                entity_path: EntityPath::from(path),
+                instance_id: Instance::from(instance),
+                view_name: Some("Cloth".into()),
+                position: None,
+            }],
+        })
+    };
+    weft::app::on_viewer_event(&link, click(paths::MESH, 3));
+    assert_eq!(link.lock().unwrap().selected, None, "not a particle");
+    weft::app::on_viewer_event(&link, click(paths::PARTICLES, 23));
+    assert_eq!(
+        link.lock().unwrap().selected,
+        Some(("rec_1".to_string(), 23))
+    );
+    let time = |t: f64| {
+        event(ViewerEventKind::TimeUpdate {
+            time: TimeReal::from(t),
+        })
+    };
+    weft::app::on_viewer_event(&link, time(2.5e9));
+    assert_eq!(
+        link.lock().unwrap().cursor,
+        Some(("rec_1".to_string(), BranchAt::Time(2.5)))
+    );
+    weft::app::on_viewer_event(
+        &link,
+        event(ViewerEventKind::TimelineChange {
+            timeline_name: "frame".into(),
+            time: TimeReal::from(120.0),
+        }),
+    );
+    assert_eq!(
+        link.lock().unwrap().cursor,
+        Some(("rec_1".to_string(), BranchAt::Frame(120)))
     );
 }

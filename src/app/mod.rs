@@ -2,28 +2,64 @@
 //! fed directly by the running simulation, beside the egui tuning panel.
 //!
 //! - [`session`]: the simulation thread, its commands and status, and the
-//!   stream that feeds the viewer (and a file, while recording);
-//! - [`panel`]: the tuning panel.
+//!   streams that feed the viewer (and a file, while recording), one Rerun
+//!   recording per run;
+//! - [`history`]: checkpoints, for branching a run from any frame;
+//! - [`panel`]: the tuning panel;
+//! - [`preset_diff`]: what a tuning changed against its preset (run names,
+//!   saving as `extend` plus changed keys).
 //!
 //! The viewer is fed in-process: every message of the session's recording
-//! stream goes into a `re_log_channel` that the embedded viewer reads, so no
-//! server or network is involved.
+//! streams goes into a `re_log_channel` that the embedded viewer reads, so
+//! no server or network is involved. The viewer reports back through its
+//! event callback (time cursor, selection), which the panel reads from a
+//! [`panel::ViewerLink`].
 
+pub mod history;
 pub mod panel;
+pub mod preset_diff;
 pub mod session;
+
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use re_viewer::external::re_log_channel;
+use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
 
-use crate::scene::load;
+use crate::scene::{Override, load};
+use crate::telemetry::paths;
 use panel::Panel;
-use session::Session;
+use session::{Command, Session};
+
+/// `weft gui --screenshot`: play some frames, save the window, quit.
+#[derive(Clone, Debug)]
+pub struct Screenshot {
+    /// The PNG file.
+    pub path: PathBuf,
+    /// Frames to play first.
+    pub frames: u64,
+}
+
+/// Marks the screenshot weft asks egui for (the viewer has its own).
+#[derive(Clone, Copy, Debug)]
+struct WeftScreenshot;
+
+/// Where `--screenshot` is: playing, waiting for the viewer to show the
+/// last frame, then waiting for egui's picture.
+enum Shot {
+    Playing,
+    Settling(u32),
+    Requested,
+}
 
 /// The window: the viewer and the panel.
 pub struct WeftApp {
     viewer: re_viewer::App,
     panel: Panel,
     session: Session,
+    screenshot: Option<(Screenshot, Shot, Instant)>,
 }
 
 impl eframe::App for WeftApp {
@@ -33,12 +69,13 @@ impl eframe::App for WeftApp {
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         egui::Panel::right("weft_panel")
-            .default_size(320.0)
+            .default_size(340.0)
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
         // The simulation runs on its own thread; keep showing its frames.
         ui.ctx()
             .request_repaint_after(std::time::Duration::from_millis(16));
+        self.take_screenshot(ui.ctx());
     }
 
     fn logic(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
@@ -46,9 +83,116 @@ impl eframe::App for WeftApp {
     }
 }
 
-/// Opens the window on `preset` (a shipped name or a file); blocks until it closes.
-pub fn run(preset: &str) -> anyhow::Result<()> {
-    let loaded = load::load(preset, &[])?;
+impl WeftApp {
+    /// Drives `--screenshot` with egui's screenshot viewport command: the
+    /// picture is what the window rendered, whatever the display does.
+    fn take_screenshot(&mut self, ctx: &egui::Context) {
+        let Some((shot, state, started)) = &mut self.screenshot else {
+            return;
+        };
+        if started.elapsed() > Duration::from_secs(300) {
+            re_log::error!("--screenshot: gave up after 300 s");
+            std::process::exit(2);
+        }
+        match state {
+            Shot::Playing => {
+                let status = self.session.status();
+                if status.frame >= shot.frames {
+                    self.session.send(Command::Pause);
+                    *state = Shot::Settling(30);
+                } else if !status.playing {
+                    self.session.send(Command::Play);
+                }
+            }
+            Shot::Settling(0) => {
+                ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::new(
+                    WeftScreenshot,
+                )));
+                *state = Shot::Requested;
+            }
+            Shot::Settling(n) => *n -= 1,
+            Shot::Requested => {
+                let image = ctx.input(|i| {
+                    i.raw.events.iter().find_map(|e| match e {
+                        egui::Event::Screenshot {
+                            image, user_data, ..
+                        } if user_data
+                            .data
+                            .as_ref()
+                            .is_some_and(|d| d.is::<WeftScreenshot>()) =>
+                        {
+                            Some(image.clone())
+                        }
+                        _ => None,
+                    })
+                });
+                if let Some(image) = image {
+                    let [w, h] = image.size;
+                    let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+                    let saved = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
+                        .map(|img| img.save(&shot.path));
+                    match saved {
+                        Some(Ok(())) => {
+                            eprintln!("saved the window ({w}×{h}) to {}", shot.path.display())
+                        }
+                        Some(Err(e)) => {
+                            re_log::error!("cannot save {}: {e}", shot.path.display());
+                            std::process::exit(2);
+                        }
+                        None => {
+                            re_log::error!("egui's screenshot has the wrong size");
+                            std::process::exit(2);
+                        }
+                    }
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            }
+        }
+        ctx.request_repaint();
+    }
+}
+
+/// What the viewer reports, passed on to the panel: the time cursor and
+/// timeline, and a particle selected in the 3D view.
+pub fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: ViewerEvent) {
+    let recording = event.recording_id.to_string();
+    let mut link = link.lock().expect("not poisoned");
+    match event.kind {
+        ViewerEventKind::TimelineChange {
+            timeline_name,
+            time,
+        } => {
+            link.timeline = Some(timeline_name.as_str().to_string());
+            link.time(recording, time.as_f64());
+        }
+        ViewerEventKind::TimeUpdate { time } => link.time(recording, time.as_f64()),
+        ViewerEventKind::SelectionChange { items } => {
+            let particles = re_viewer::external::re_log_types::EntityPath::from(paths::PARTICLES);
+            for item in items {
+                if let SelectionChangeItem::Entity {
+                    entity_path,
+                    instance_id,
+                    ..
+                } = item
+                    && entity_path == particles
+                    && !instance_id.is_all()
+                {
+                    link.select(recording.clone(), instance_id.get() as usize);
+                }
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Opens the window on `preset` (a shipped name or a file) with `--set`
+/// overrides; blocks until it closes.
+pub fn run(
+    preset: &str,
+    overrides: &[Override],
+    screenshot: Option<Screenshot>,
+) -> anyhow::Result<()> {
+    let loaded = load::load(preset, overrides)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
     }
@@ -56,16 +200,29 @@ pub fn run(preset: &str) -> anyhow::Result<()> {
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();
     let (tx, rx) = re_log_channel::log_channel(re_log_channel::LogSource::Sdk);
-    let session = Session::start(loaded, preset.to_string(), move |msg| {
-        let _ = tx.send(msg.clone().into());
-    })
+    let session = Session::start(
+        loaded,
+        preset.to_string(),
+        move |msg: &rerun::log::LogMsg| {
+            // The viewer's end closes only with the window, when nothing is
+            // left to show a message to.
+            tx.send(msg.clone().into()).ok();
+        },
+    )
     .map_err(anyhow::Error::msg)?;
     let panel = Panel::new(&session.status());
+    let link = panel.link();
     let mut options = re_viewer::native::eframe_options(None);
     options.viewport = options
         .viewport
         .with_app_id("weft")
         .with_inner_size([1400.0, 860.0]);
+    let startup = re_viewer::StartupOptions {
+        on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
+        // A screenshot shows the window as it opens, not as last left.
+        persist_state: screenshot.is_none(),
+        ..Default::default()
+    };
     eframe::run_native(
         "weft",
         options,
@@ -75,7 +232,7 @@ pub fn run(preset: &str) -> anyhow::Result<()> {
                 main_thread_token,
                 re_viewer::build_info(),
                 re_viewer::AppEnvironment::Custom("weft".into()),
-                re_viewer::StartupOptions::default(),
+                startup,
                 cc,
                 None,
                 re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
@@ -85,6 +242,7 @@ pub fn run(preset: &str) -> anyhow::Result<()> {
                 viewer,
                 panel,
                 session,
+                screenshot: screenshot.map(|s| (s, Shot::Playing, Instant::now())),
             }))
         }),
     )

@@ -3,18 +3,68 @@
 //! Every edit is validated like a preset value before it reaches the
 //! session; a rejected value leaves the parameter as it was and shows the
 //! message. The panel holds only edit buffers; the session owns the scene.
+//! What the viewer reports (its time cursor, the particle selected in the
+//! 3D view) reaches the panel through a [`ViewerLink`].
+//!
+//! Keyboard shortcuts (function keys, which the viewer leaves free; its own
+//! Space and arrows keep moving its timeline): [`SHORTCUTS`].
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
-use egui::{Color32, RichText, Slider, SliderClamping};
+use egui::{Color32, Key, RichText, Slider, SliderClamping};
 
-use super::session::{Command, Session, Status};
+use super::preset_diff;
+use super::session::{BranchAt, Command, Session, Status};
 use crate::scene::{
     Override, Tuning, load,
     preset::{ColorBy, Level, Preset, TelemetrySettings},
     shipped,
 };
 use crate::solver::{Family, Width};
+
+/// The simulation's keyboard shortcuts: key, what it does.
+pub const SHORTCUTS: [(Key, &str); 4] = [
+    (Key::F6, "Play / Pause"),
+    (Key::F7, "Step"),
+    (Key::F8, "Branch"),
+    (Key::F9, "Reset"),
+];
+
+/// What the embedded viewer last reported, written by its event callback.
+#[derive(Clone, Debug, Default)]
+pub struct ViewerLink {
+    /// The timeline the viewer's time cursor is on (`sim_time` until the
+    /// viewer says otherwise).
+    pub timeline: Option<String>,
+    /// The recording id and position of the time cursor.
+    pub cursor: Option<(String, BranchAt)>,
+    /// Bumped at every cursor move.
+    pub cursor_moves: u64,
+    /// The recording id and index of the particle selected in the 3D view.
+    pub selected: Option<(String, usize)>,
+    /// Bumped at every selection.
+    pub selections: u64,
+}
+
+impl ViewerLink {
+    /// Notes the time cursor at `time` (the viewer's units: frames on
+    /// `frame`, nanoseconds on `sim_time`) in recording `recording`.
+    pub fn time(&mut self, recording: String, time: f64) {
+        let at = match self.timeline.as_deref() {
+            Some(crate::telemetry::paths::FRAME) => BranchAt::Frame(time.round().max(0.0) as u64),
+            _ => BranchAt::Time(time * 1e-9),
+        };
+        self.cursor = Some((recording, at));
+        self.cursor_moves += 1;
+    }
+
+    /// Notes a particle selected in recording `recording`.
+    pub fn select(&mut self, recording: String, particle: usize) {
+        self.selected = Some((recording, particle));
+        self.selections += 1;
+    }
+}
 
 /// The panel's state between frames.
 pub struct Panel {
@@ -26,6 +76,13 @@ pub struct Panel {
     record_path: String,
     set_text: String,
     message: Option<(bool, String)>,
+    branch_frame: u64,
+    branch_at: Option<BranchAt>,
+    particle: usize,
+    inspecting: bool,
+    save_diff: bool,
+    link: Arc<Mutex<ViewerLink>>,
+    seen: (u64, u64),
 }
 
 impl Panel {
@@ -51,6 +108,13 @@ impl Panel {
             record_path: format!("{stem}_session.rrd"),
             set_text: String::new(),
             message: None,
+            branch_frame: 0,
+            branch_at: None,
+            particle: 0,
+            inspecting: false,
+            save_diff: load::load(&status.preset_name, &[]).is_ok(),
+            link: Arc::default(),
+            seen: (0, 0),
         };
         p.sync(&preset);
         p
@@ -59,6 +123,11 @@ impl Panel {
     /// Sets where "Save preset" writes.
     pub fn set_save_path(&mut self, path: impl Into<String>) {
         self.save_path = path.into();
+    }
+
+    /// The link the viewer's event callback writes to.
+    pub fn link(&self) -> Arc<Mutex<ViewerLink>> {
+        self.link.clone()
     }
 
     /// Sets where "Record" writes.
@@ -78,6 +147,8 @@ impl Panel {
     /// Draws the panel and sends what the user changed.
     pub fn ui(&mut self, ui: &mut egui::Ui, session: &Session) {
         let status = session.status();
+        self.shortcuts(ui.ctx(), session, &status);
+        self.follow_viewer(session, &status);
         egui::ScrollArea::vertical()
             .auto_shrink([false, false])
             .show(ui, |ui| {
@@ -87,6 +158,10 @@ impl Panel {
                 self.transport_ui(ui, session, &status);
                 ui.separator();
                 self.readouts_ui(ui, &status);
+                ui.separator();
+                self.verdicts_ui(ui, &status);
+                ui.separator();
+                self.inspector_ui(ui, session, &status);
                 ui.separator();
                 self.solver_ui(ui, session);
                 ui.separator();
@@ -154,20 +229,110 @@ impl Panel {
         }
     }
 
+    /// F6 play/pause, F7 step, F8 branch, F9 reset (see [`SHORTCUTS`]).
+    fn shortcuts(&mut self, ctx: &egui::Context, session: &Session, status: &Status) {
+        let pressed = |key| ctx.input_mut(|i| i.consume_key(egui::Modifiers::NONE, key));
+        if pressed(Key::F6) {
+            session.send(if status.playing {
+                Command::Pause
+            } else {
+                Command::Play
+            });
+        }
+        if pressed(Key::F7) {
+            session.send(Command::Step);
+        }
+        if pressed(Key::F8) {
+            self.branch(session, status);
+        }
+        if pressed(Key::F9) {
+            session.send(Command::Reset);
+        }
+    }
+
+    /// Takes the viewer's time cursor (on the current run) as the branch
+    /// point, and a particle selected in the 3D view as the inspected one.
+    fn follow_viewer(&mut self, session: &Session, status: &Status) {
+        let link = self.link.lock().expect("not poisoned").clone();
+        if link.cursor_moves != self.seen.0 {
+            self.seen.0 = link.cursor_moves;
+            if let Some((id, at)) = link.cursor
+                && id == status.run.recording_id
+            {
+                self.branch_at = Some(at);
+                if let BranchAt::Frame(f) = at {
+                    self.branch_frame = f;
+                }
+            }
+        }
+        if link.selections != self.seen.1 {
+            self.seen.1 = link.selections;
+            if let Some((_, i)) = link.selected {
+                self.particle = i;
+                self.inspecting = true;
+                session.send(Command::Inspect(Some(i)));
+            }
+        }
+    }
+
+    fn branch(&mut self, session: &Session, status: &Status) {
+        let at = self.branch_at.unwrap_or(BranchAt::Frame(status.frame));
+        session.send(Command::Branch(at));
+        self.branch_at = None;
+    }
+
     fn transport_ui(&mut self, ui: &mut egui::Ui, session: &Session, status: &Status) {
         ui.horizontal(|ui| {
             if status.playing {
-                if ui.button("Pause").clicked() {
+                if ui.button("Pause").on_hover_text("Pause (F6)").clicked() {
                     session.send(Command::Pause);
                 }
-            } else if ui.button("Play").clicked() {
+            } else if ui.button("Play").on_hover_text("Play (F6)").clicked() {
                 session.send(Command::Play);
             }
-            if ui.button("Step").clicked() {
+            if ui
+                .button("Step")
+                .on_hover_text("Step one frame (F7)")
+                .clicked()
+            {
                 session.send(Command::Step);
             }
-            if ui.button("Reset").clicked() {
+            if ui
+                .button("Reset")
+                .on_hover_text("Start over from frame 0 with the current tuning, as a new run (F9)")
+                .clicked()
+            {
                 session.send(Command::Reset);
+            }
+        });
+        ui.horizontal(|ui| {
+            if ui
+                .button("Branch")
+                .on_hover_text(
+                    "A new run from this frame of the current one, with the current tuning (F8)",
+                )
+                .clicked()
+            {
+                self.branch(session, status);
+            }
+            ui.label("at frame");
+            match self.branch_at {
+                None => self.branch_frame = status.frame,
+                // Shown as a frame; the session finds the exact one.
+                Some(BranchAt::Time(t)) => {
+                    let dt = status.preset.as_ref().map_or(1.0, |p| p.solver.dt) as f64;
+                    self.branch_frame = (t / dt).round() as u64;
+                }
+                Some(BranchAt::Frame(_)) => {}
+            }
+            if ui
+                .add(egui::DragValue::new(&mut self.branch_frame).range(0..=status.frame))
+                .changed()
+            {
+                self.branch_at = Some(BranchAt::Frame(self.branch_frame));
+            }
+            if let Some(BranchAt::Time(t)) = self.branch_at {
+                ui.label(format!("(time cursor {t:.2} s)"));
             }
         });
         if ui
@@ -202,6 +367,91 @@ impl Panel {
                 row(ui, "max strain", format!("{:.4}", status.max_strain));
                 for (f, v) in status.max_violation.iter() {
                     row(ui, &format!("max {}", f.name()), format!("{v:.4}"));
+                }
+                row(
+                    ui,
+                    "checkpoints",
+                    format!(
+                        "{} (every {} frames)",
+                        status.checkpoints.0, status.checkpoints.1
+                    ),
+                );
+            });
+        ui.label(RichText::new(format!("run {}", status.run.name)).small())
+            .on_hover_text(format!(
+                "Rerun recording {}; {} runs in this session (the viewer's recording list)",
+                status.run.recording_id,
+                status.runs.len()
+            ));
+    }
+
+    /// The preset's `[expect]` bounds against the run so far.
+    fn verdicts_ui(&mut self, ui: &mut egui::Ui, status: &Status) {
+        ui.label(RichText::new("Verdicts").strong())
+            .on_hover_text("the preset's [expect] bounds against this run's values so far");
+        if status.checks.is_empty() {
+            ui.label("no [expect] bounds in this preset");
+            return;
+        }
+        egui::Grid::new("verdicts")
+            .num_columns(4)
+            .striped(true)
+            .show(ui, |ui| {
+                for c in &status.checks {
+                    ui.label(c.bound.trim_start_matches("expect."));
+                    ui.monospace(format!("{:.3e}", c.value));
+                    ui.monospace(format!("≤ {:.3e}", c.limit));
+                    if c.ok {
+                        ui.colored_label(Color32::from_rgb(110, 190, 110), "ok");
+                    } else {
+                        ui.colored_label(Color32::from_rgb(230, 80, 70), "FAIL");
+                    }
+                    ui.end_row();
+                }
+            });
+    }
+
+    /// One particle's numbers: pick it in the 3D view, or type its index.
+    fn inspector_ui(&mut self, ui: &mut egui::Ui, session: &Session, status: &Status) {
+        ui.label(RichText::new("Particle").strong())
+            .on_hover_text("click a particle in the 3D view, or type its index");
+        let n = status
+            .preset
+            .as_ref()
+            .map_or(1, |p| (p.cloth.weft * p.cloth.warp) as usize);
+        ui.horizontal(|ui| {
+            let mut changed = ui
+                .checkbox(&mut self.inspecting, "inspect particle")
+                .changed();
+            changed |= ui
+                .add(egui::DragValue::new(&mut self.particle).range(0..=n.saturating_sub(1)))
+                .changed();
+            if changed {
+                session.send(Command::Inspect(self.inspecting.then_some(self.particle)));
+            }
+        });
+        let Some(p) = status.particle.as_ref().filter(|_| self.inspecting) else {
+            return;
+        };
+        ui.monospace(format!(
+            "#{}  (i, j) = ({}, {})   strain {:.4}",
+            p.index, p.cell.0, p.cell.1, p.strain
+        ));
+        egui::Grid::new("particle")
+            .num_columns(4)
+            .striped(true)
+            .show(ui, |ui| {
+                ui.label("family");
+                ui.label("violation");
+                ui.label("|δx| (mm)");
+                ui.label("|δθ| (mrad)");
+                ui.end_row();
+                for f in Family::ALL {
+                    ui.label(f.name());
+                    ui.monospace(format!("{:.4}", p.violation[f]));
+                    ui.monospace(format!("{:.4}", p.dx[f].length() * 1e3));
+                    ui.monospace(format!("{:.4}", p.dtheta[f].length() * 1e3));
+                    ui.end_row();
                 }
             });
     }
@@ -322,15 +572,10 @@ impl Panel {
                 }
             });
         egui::ComboBox::from_label("colour by")
-            .selected_text(format!("{:?}", t.color_by).to_lowercase())
+            .selected_text(t.color_by.name())
             .show_ui(ui, |ui| {
-                for c in [
-                    ColorBy::Strain,
-                    ColorBy::Speed,
-                    ColorBy::Correction,
-                    ColorBy::None,
-                ] {
-                    ui.selectable_value(&mut t.color_by, c, format!("{c:?}").to_lowercase());
+                for c in ColorBy::ALL {
+                    ui.selectable_value(&mut t.color_by, c, c.name());
                 }
             });
         ui.horizontal_wrapped(|ui| {
@@ -401,6 +646,11 @@ impl Panel {
                 self.save(status);
             }
         });
+        ui.checkbox(&mut self.save_diff, "save as a diff")
+            .on_hover_text(format!(
+                "extend = \"{}\" and only the changed keys; off: the whole preset",
+                status.preset_name
+            ));
         ui.horizontal(|ui| {
             ui.add(egui::TextEdit::singleline(&mut self.record_path).desired_width(150.0));
             if status.recording.is_some() {
@@ -414,16 +664,27 @@ impl Panel {
         });
     }
 
-    /// Writes the current preset (with the tuning) and checks it loads back identically.
+    /// Writes the current preset (with the tuning) and checks it loads
+    /// back identically: as `extend = "<base>"` plus the changed keys when
+    /// "save as a diff" is on and the base loads, else whole.
     fn save(&mut self, status: &Status) {
         let Some(preset) = &status.preset else { return };
-        let text = format!(
-            "# Saved by weft from {} at frame {}.\n{}",
-            status.preset_name,
-            status.frame,
-            load::to_toml(preset)
-        );
         let path = self.save_path.clone();
+        let comment = format!(
+            "Saved by weft from {} at frame {}.",
+            status.preset_name, status.frame
+        );
+        let diff = match load::load(&status.preset_name, &[]) {
+            Ok(base) if self.save_diff => preset_diff::as_extension(
+                &comment,
+                &status.preset_name,
+                &base.preset,
+                preset,
+                Path::new(&path),
+            ),
+            _ => None,
+        };
+        let text = diff.unwrap_or_else(|| format!("# {comment}\n{}", load::to_toml(preset)));
         if let Err(e) = std::fs::write(&path, text) {
             return self.say(false, format!("cannot save to {path}: {e}"));
         }

@@ -207,3 +207,18 @@ pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
     }
     e as f32
 }
+
+/// Per particle, the largest strain of its weft and warp edges, as in
+/// [`max_strain`] (0 when all are compressed).
+pub fn particle_strain(state: &ClothState, topology: &Topology) -> Vec<f32> {
+    let x = &state.position;
+    let mut out = vec![0.0f32; state.len()];
+    for p in &topology.structural.items {
+        let len = x[p.b as usize].distance(x[p.a as usize]);
+        let s = ((len - p.rest) / p.rest).max(0.0);
+        for i in [p.a as usize, p.b as usize] {
+            out[i] = out[i].max(s);
+        }
+    }
+    out
+}

@@ -28,7 +28,7 @@ use super::constraints::{
 use super::diagnostics::Violation;
 use super::forced_rotation::ForcedRotation;
 use super::params::{REFERENCE_COMPLIANCE, compliance_factor};
-use super::topology::{Batched, Topology};
+use super::topology::{Batched, Pair, Topology};
 
 /// The constraint families of the adjust phase.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -423,4 +423,40 @@ pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Vio
         Family::Normality => stats(&[&topology.structural], |p| normality::violation(normal, p)),
         Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
     }
+}
+
+/// Per particle, the largest violation of `family` over the constraints
+/// that involve it (pairs: both ends; bend triples: all three), as in
+/// [`violation`]. For inspecting one particle.
+pub fn particle_violation(family: Family, state: &ClothState, topology: &Topology) -> Vec<f32> {
+    let x = &state.position;
+    let normal = |i| state.normal(i);
+    let mut out = vec![0.0f32; state.len()];
+    let mut put = |i: u32, v: f32| {
+        let slot = &mut out[i as usize];
+        *slot = slot.max(v);
+    };
+    let mut pairs = |set: &Batched<Pair>, f: &dyn Fn(Pair) -> f32| {
+        for &p in &set.items {
+            let v = f(p);
+            put(p.a, v);
+            put(p.b, v);
+        }
+    };
+    match family {
+        Family::Stretch => pairs(&topology.structural, &|p| stretch::violation(x, p)),
+        Family::Planarity => pairs(&topology.structural, &|p| {
+            planarity::violation(x, normal, p)
+        }),
+        Family::Normality => pairs(&topology.structural, &|p| normality::violation(normal, p)),
+        Family::Curvature => {
+            for &t in &topology.bend.items {
+                let v = curvature::violation(x, t);
+                put(t.a, v);
+                put(t.mid, v);
+                put(t.b, v);
+            }
+        }
+    }
+    out
 }

@@ -407,6 +407,17 @@ impl Solver {
         family::violation(family, &self.state, &self.topology)
     }
 
+    /// Per particle, the largest violation of `family` among the
+    /// constraints that involve it.
+    pub fn particle_violation(&self, family: Family) -> Vec<f32> {
+        family::particle_violation(family, &self.state, &self.topology)
+    }
+
+    /// Per particle, the largest strain of its weft and warp edges.
+    pub fn particle_strain(&self) -> Vec<f32> {
+        diagnostics::particle_strain(&self.state, &self.topology)
+    }
+
     /// The largest strain of a weft or warp edge.
     pub fn max_strain(&self) -> f32 {
         diagnostics::max_strain(&self.state, &self.topology)

@@ -38,7 +38,7 @@ pub fn ramp(t: f32) -> Color {
 
 /// Per-particle colours for `by`, each scaled to a fixed, documented range
 /// so colours mean the same from frame to frame: strain 0 → 10 %, speed
-/// 0 → 10 m/s, correction 0 → 1 mm.
+/// 0 → 10 m/s, correction (all families, or one) 0 → 1 mm.
 pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
     let solver = scene.solver();
     let state = solver.state();
@@ -61,11 +61,18 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
                 .map(|i| ramp((state.position[i] - state.prev_position[i]).length() / dt / 10.0))
                 .collect()
         }
-        ColorBy::Correction => match solver.diagnostics() {
+        ColorBy::Correction
+        | ColorBy::CorrectionStretch
+        | ColorBy::CorrectionPlanarity
+        | ColorBy::CorrectionNormality
+        | ColorBy::CorrectionCurvature => match solver.diagnostics() {
             None => vec![Color::from_rgb(220, 200, 160); n],
             Some(d) => (0..n)
                 .map(|i| {
-                    let total: f32 = d.families.iter().map(|(_, f)| f.dx[i].length()).sum();
+                    let total: f32 = match by.family() {
+                        Some(f) => d.family(f).dx[i].length(),
+                        None => d.families.iter().map(|(_, f)| f.dx[i].length()).sum(),
+                    };
                     ramp(total / 1e-3)
                 })
                 .collect(),

@@ -9,6 +9,7 @@
 //! |---|---|---|
 //! | `world` | Z-up view coordinates | static |
 //! | `world/cloth/particles` | points, coloured by `color_by` | summary |
+//! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` | full, with `set_particle_values` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
@@ -47,6 +48,7 @@ pub struct Telemetry {
     last_tuning: Option<Tuning>,
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
+    particle_values: bool,
 }
 
 impl Telemetry {
@@ -57,7 +59,16 @@ impl Telemetry {
             settings,
             last_tuning: None,
             last_cost: Duration::ZERO,
+            particle_values: false,
         }
+    }
+
+    /// Whether each frame at level full also logs every particle's values
+    /// (strain, violation, δx and δθ per family) on the particles entity,
+    /// for hovering in the viewer. The desktop debugger turns this on;
+    /// `weft record` leaves it off (it adds about a third to a full file).
+    pub fn set_particle_values(&mut self, on: bool) {
+        self.particle_values = on;
     }
 
     /// The settings in force.
@@ -83,8 +94,7 @@ impl Telemetry {
     /// Whether the solver's diagnostics must record every particle's
     /// corrections: for the arrows (level full) and for colouring by them.
     pub fn needs_corrections(&self) -> bool {
-        self.settings.level == Level::Full
-            || self.settings.color_by == crate::scene::preset::ColorBy::Correction
+        self.settings.level == Level::Full || self.settings.color_by.uses_corrections()
     }
 
     /// Whether frame `frame` is logged.
@@ -139,6 +149,15 @@ impl Telemetry {
                     "bend",
                     bends.into_iter().map(u64::from),
                 ),
+        )?;
+        // Each particle's grid cell (i along the weft, j along the warp),
+        // shown when a particle is hovered in the viewer.
+        let (nw, nn) = (spec.weft as u64, spec.warp as u64);
+        rec.log_static(
+            paths::PARTICLES,
+            &rerun::AnyValues::default()
+                .with_component::<rerun::components::Count>("i", (0..nw * nn).map(|k| k % nw))
+                .with_component::<rerun::components::Count>("j", (0..nw * nn).map(|k| k / nw)),
         )?;
         let triangles: Vec<[u32; 3]> = topo.triangles.clone();
         rec.log_static(
@@ -391,6 +410,9 @@ impl Telemetry {
             if let Some(d) = diag {
                 self.log_corrections(x, d)?;
             }
+            if self.particle_values {
+                self.log_particle_values(scene)?;
+            }
             for (name, pose) in scene.body_names().zip(scene.body_poses()) {
                 rec.log(
                     paths::body(name),
@@ -400,6 +422,40 @@ impl Telemetry {
         }
         self.last_cost = start.elapsed();
         Ok(())
+    }
+
+    /// Per-particle values beside the points, so hovering a particle in the
+    /// viewer shows them: strain, each family's violation, and the length
+    /// of each family's δx (m) and δθ (rad) in the last adjust.
+    fn log_particle_values(&self, scene: &Scene) -> RecordingStreamResult<()> {
+        let solver = scene.solver();
+        let scalars = |v: Vec<f32>| v.into_iter().map(f64::from).collect::<Vec<f64>>();
+        let mut values = rerun::AnyValues::default().with_component::<rerun::components::Scalar>(
+            "strain",
+            scalars(solver.particle_strain()),
+        );
+        for f in Family::ALL {
+            values = values.with_component::<rerun::components::Scalar>(
+                particle_component("violation", f),
+                scalars(solver.particle_violation(f)),
+            );
+        }
+        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
+            for f in Family::ALL {
+                let fd = d.family(f);
+                let len = |v: &[Vec3]| v.iter().map(|v| v.length() as f64).collect::<Vec<_>>();
+                values = values
+                    .with_component::<rerun::components::Scalar>(
+                        particle_component("dx", f),
+                        len(&fd.dx),
+                    )
+                    .with_component::<rerun::components::Scalar>(
+                        particle_component("dtheta", f),
+                        len(&fd.dtheta),
+                    );
+            }
+        }
+        self.rec.log(paths::PARTICLES, &values)
     }
 
     fn log_corrections(&self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
@@ -430,6 +486,12 @@ impl Telemetry {
     pub fn flush(&self) -> Result<(), rerun::sink::SinkFlushError> {
         self.rec.flush_blocking()
     }
+}
+
+/// A per-family component on the particles entity: `violation_stretch`,
+/// `dx_curvature`, …
+fn particle_component(kind: &str, f: Family) -> rerun::ComponentIdentifier {
+    rerun::ComponentIdentifier::try_new(format!("{kind}_{}", f.name())).expect("not empty")
 }
 
 fn ms(d: Duration) -> f64 {

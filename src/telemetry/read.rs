@@ -2,7 +2,7 @@
 //! its store id), with its entities, frames, array lengths, and the texts
 //! weft stores (preset, parameters, summary, events).
 //!
-//! Used by `weft replay` and by tests. The file is decoded with Rerun's
+//! Used by `weft replay`, `weft compare` and by tests. The file is decoded with Rerun's
 //! decoder into one chunk store per recording, and every question is a query
 //! of Rerun's dataframe API (`rerun::dataframe`): which columns an entity
 //! has (its schema), and its rows on the `frame` timeline. Texts are read on
@@ -21,7 +21,7 @@ use rerun::dataframe::{
 use rerun::external::arrow::{
     array::{Array, ArrayRef, AsArray as _, ListArray},
     compute::cast,
-    datatypes::{DataType, Float32Type, Int64Type},
+    datatypes::{DataType, Float32Type, Float64Type, Int64Type, UInt32Type},
 };
 use rerun::external::re_log_encoding::DecoderApp;
 
@@ -62,6 +62,30 @@ pub struct Recording {
     pub summary: Option<String>,
     /// Particle positions at the last logged frame.
     pub last_positions: Option<(i64, Vec<[f32; 3]>)>,
+    /// Whether the file carries a blueprint (a viewer layout).
+    pub blueprint: bool,
+    /// The recording's properties as text, by `entity:component` under
+    /// `__properties` (`__properties:RecordingInfo:name`,
+    /// `__properties/weft:preset`…).
+    pub properties: BTreeMap<String, String>,
+    /// Particle positions at every logged frame.
+    pub positions: BTreeMap<i64, Vec<[f32; 3]>>,
+    /// Every scalar series (`metrics/…`), by entity path: one sample per
+    /// logged frame, in frame order.
+    pub scalars: BTreeMap<String, Vec<Sample>>,
+    /// The simulated time, in seconds, of each frame anything was logged at.
+    pub sim_time: BTreeMap<i64, f64>,
+    /// The cloth's triangles (static), if stored.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// One value of a scalar series.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// The frame it was logged at.
+    pub frame: i64,
+    /// The value.
+    pub value: f64,
 }
 
 impl Recording {
@@ -116,12 +140,16 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
     let mut messages = Vec::new();
     let mut order = Vec::new();
     let mut failed = false;
+    let mut blueprint = false;
+    let mut decoded = 0;
     for msg in decoder.by_ref() {
         let Ok(msg) = msg else {
             failed = true;
             break;
         };
+        decoded += 1;
         let id = msg.store_id().clone();
+        blueprint |= id.kind() == StoreKind::Blueprint;
         if id.kind() == StoreKind::Recording {
             if !order.contains(&id) {
                 order.push(id);
@@ -134,6 +162,12 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
     let truncated = failed
         || decoder.num_bytes_processed() < size
         || decoder.rrd_manifests().map_or(true, |m| m.is_empty());
+    if decoded == 0 {
+        return Err(format!(
+            "{}: not a Rerun recording (no message could be decoded)",
+            path.display()
+        ));
+    }
     let last = order.last().cloned();
     let mut stores = ChunkStore::from_log_msgs(&ChunkStoreConfig::ALL_DISABLED, messages)
         .map_err(|e| format!("{}: bad recording: {e}", path.display()))?;
@@ -145,6 +179,7 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
             let mut rec = recording(&engine);
             rec.id = id.recording_id().to_string();
             rec.truncated = truncated && Some(&id) == last.as_ref();
+            rec.blueprint = blueprint;
             Some(Ok(rec))
         })
         .collect()
@@ -153,18 +188,34 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
 /// Everything weft reads from one recording's store.
 fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
     let mut out = Recording::default();
+    for entity in
+        engine.iter_entity_paths_sorted(&EntityPathFilter::parse_forgiving("+ /__properties/**"))
+    {
+        let path = entity.to_string().trim_start_matches('/').to_string();
+        properties(engine, &entity, &path, &mut out.properties);
+    }
     for entity in engine.iter_entity_paths_sorted(&EntityPathFilter::all()) {
         let path = entity.to_string().trim_start_matches('/').to_string();
         if path.starts_with("__") {
-            continue; // the SDK's own (recording properties)
+            continue; // the SDK's own
         }
-        let info = entity_info(engine, &entity);
+        let info = entity_info(engine, &entity, &mut out.sim_time);
         match path.as_str() {
             paths::PRESET => out.preset = texts(engine, &entity, &info).pop().map(|(_, t)| t),
             paths::SUMMARY => out.summary = texts(engine, &entity, &info).pop().map(|(_, t)| t),
             paths::PARAMS => out.params = texts(engine, &entity, &info),
             paths::EVENTS => out.events = texts(engine, &entity, &info),
-            paths::PARTICLES => out.last_positions = last_positions(engine, &entity, &info),
+            paths::PARTICLES => {
+                out.positions = positions(engine, &entity, &info);
+                out.last_positions = out.positions.last_key_value().map(|(f, x)| (*f, x.clone()));
+            }
+            paths::MESH => out.triangles = triangles(engine, &entity, &info),
+            p if p.starts_with("metrics/") => {
+                let series = scalars(engine, &entity, &info);
+                if !series.is_empty() {
+                    out.scalars.insert(path.clone(), series);
+                }
+            }
             _ => {}
         }
         out.entities.insert(path, info);
@@ -172,8 +223,35 @@ fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
     out
 }
 
-/// An entity's columns, and its rows on the `frame` timeline.
-fn entity_info(engine: &QueryEngine<StorageEngine>, entity: &EntityPath) -> EntityInfo {
+/// The text-valued recording properties of `entity` (the start time, a
+/// timestamp, is left out).
+fn properties(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    path: &str,
+    out: &mut BTreeMap<String, String>,
+) {
+    let schema = engine.schema_for_query(&contents(entity));
+    for c in &schema.components {
+        let name = c.component.as_str();
+        let text = static_value(engine, entity, name).and_then(|list| {
+            let value = list.value(0);
+            let s = value.as_string_opt::<i32>()?;
+            (!s.is_empty()).then(|| s.value(0).to_string())
+        });
+        if let Some(text) = text {
+            out.insert(format!("{path}:{name}"), text);
+        }
+    }
+}
+
+/// An entity's columns, and its rows on the `frame` timeline; notes the
+/// simulated time of each of its frames in `sim_time`.
+fn entity_info(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    sim_time: &mut BTreeMap<i64, f64>,
+) -> EntityInfo {
     let mut info = EntityInfo::default();
     let schema = engine.schema_for_query(&contents(entity));
     for c in &schema.components {
@@ -191,6 +269,7 @@ fn entity_info(engine: &QueryEngine<StorageEngine>, entity: &EntityPath) -> Enti
         info.frames.insert(row.index);
         if let Some(t) = row.times[0] {
             info.sim_times.insert(t);
+            sim_time.insert(row.index, t as f64 * 1e-9);
         }
         if temporal && let Some(list) = &row.value {
             info.lengths.push(list.value_length(0) as usize);
@@ -236,24 +315,79 @@ fn texts(
     out
 }
 
-/// The particle positions at the last frame they were logged.
-fn last_positions(
+/// The particle positions at every frame they were logged.
+fn positions(
     engine: &QueryEngine<StorageEngine>,
     entity: &EntityPath,
     info: &EntityInfo,
-) -> Option<(i64, Vec<[f32; 3]>)> {
-    let component = info.components.iter().find(|c| c.ends_with(":positions"))?;
-    let row = rows(engine, entity, paths::FRAME, &[], component)
+) -> BTreeMap<i64, Vec<[f32; 3]>> {
+    let Some(component) = info.components.iter().find(|c| c.ends_with(":positions")) else {
+        return BTreeMap::new();
+    };
+    rows(engine, entity, paths::FRAME, &[], component)
         .into_iter()
-        .rfind(|r| r.value.is_some())?;
-    let points = row.value?.value(0);
-    let points = points.as_fixed_size_list_opt()?;
-    let xyz = points.values().as_primitive_opt::<Float32Type>()?;
-    let xyz = xyz.values();
-    let positions = (0..points.len())
-        .map(|i| [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]])
-        .collect();
-    Some((row.index, positions))
+        .filter_map(|row| {
+            let points = row.value?.value(0);
+            let points = points.as_fixed_size_list_opt()?;
+            let xyz = points.values().as_primitive_opt::<Float32Type>()?;
+            let xyz = xyz.values();
+            let positions = (0..points.len())
+                .map(|i| [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]])
+                .collect();
+            Some((row.index, positions))
+        })
+        .collect()
+}
+
+/// A scalar series: the first value of each row on the `frame` timeline.
+fn scalars(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    info: &EntityInfo,
+) -> Vec<Sample> {
+    let Some(component) = info.components.iter().find(|c| c.ends_with(":scalars")) else {
+        return Vec::new();
+    };
+    rows(engine, entity, paths::FRAME, &[], component)
+        .into_iter()
+        .filter_map(|row| {
+            let values = row.value?.value(0);
+            let values = values.as_primitive_opt::<Float64Type>()?;
+            (!values.is_empty()).then(|| Sample {
+                frame: row.index,
+                value: values.value(0),
+            })
+        })
+        .collect()
+}
+
+/// The static triangle indices of a mesh.
+fn triangles(
+    engine: &QueryEngine<StorageEngine>,
+    entity: &EntityPath,
+    info: &EntityInfo,
+) -> Vec<[u32; 3]> {
+    let Some(component) = info
+        .components
+        .iter()
+        .find(|c| c.ends_with(":triangle_indices"))
+    else {
+        return Vec::new();
+    };
+    let Some(list) = static_value(engine, entity, component) else {
+        return Vec::new();
+    };
+    let value = list.value(0);
+    let Some(triples) = value.as_fixed_size_list_opt() else {
+        return Vec::new();
+    };
+    let Some(indices) = triples.values().as_primitive_opt::<UInt32Type>() else {
+        return Vec::new();
+    };
+    let indices = indices.values();
+    (0..triples.len())
+        .map(|i| [indices[3 * i], indices[3 * i + 1], indices[3 * i + 2]])
+        .collect()
 }
 
 /// One row of a query: its index value, the values of other timelines, and

@@ -27,8 +27,65 @@ pub enum ColorBy {
     Speed,
     /// Size of the particle's total correction in the last adjust.
     Correction,
+    /// Size of the stretch family's correction alone.
+    #[serde(rename = "correction.stretch")]
+    CorrectionStretch,
+    /// Size of the planarity family's correction alone.
+    #[serde(rename = "correction.planarity")]
+    CorrectionPlanarity,
+    /// Size of the normality family's correction alone.
+    #[serde(rename = "correction.normality")]
+    CorrectionNormality,
+    /// Size of the curvature family's correction alone.
+    #[serde(rename = "correction.curvature")]
+    CorrectionCurvature,
     /// One colour.
     None,
+}
+
+impl ColorBy {
+    /// Every choice, in menu order.
+    pub const ALL: [ColorBy; 8] = [
+        ColorBy::Strain,
+        ColorBy::Speed,
+        ColorBy::Correction,
+        ColorBy::CorrectionStretch,
+        ColorBy::CorrectionPlanarity,
+        ColorBy::CorrectionNormality,
+        ColorBy::CorrectionCurvature,
+        ColorBy::None,
+    ];
+
+    /// The name used in presets (`correction.planarity`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ColorBy::Strain => "strain",
+            ColorBy::Speed => "speed",
+            ColorBy::Correction => "correction",
+            ColorBy::CorrectionStretch => "correction.stretch",
+            ColorBy::CorrectionPlanarity => "correction.planarity",
+            ColorBy::CorrectionNormality => "correction.normality",
+            ColorBy::CorrectionCurvature => "correction.curvature",
+            ColorBy::None => "none",
+        }
+    }
+
+    /// The one family a `correction.<family>` colouring shows, if any.
+    pub fn family(self) -> Option<crate::solver::Family> {
+        use crate::solver::Family;
+        match self {
+            ColorBy::CorrectionStretch => Some(Family::Stretch),
+            ColorBy::CorrectionPlanarity => Some(Family::Planarity),
+            ColorBy::CorrectionNormality => Some(Family::Normality),
+            ColorBy::CorrectionCurvature => Some(Family::Curvature),
+            _ => None,
+        }
+    }
+
+    /// Whether it needs every particle's corrections.
+    pub fn uses_corrections(self) -> bool {
+        self == ColorBy::Correction || self.family().is_some()
+    }
 }
 
 /// Telemetry settings (see the README's telemetry section).

@@ -1,0 +1,124 @@
+//! `weft compare`: its options and what it prints, writes and exits with.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args;
+use glam::Vec3;
+
+use super::gate::{self, Bound};
+use super::recording::{self, Placement};
+use super::{RunData, incomparable, read_all, report};
+
+/// Options of `weft compare`.
+#[derive(Debug, Args)]
+#[command(after_help = "\
+Exit codes: 0 compared; 1 a --fail-if bound regressed (a table says what); 2 bad input
+(not a weft recording, a recording cut short, runs of different scenes), after printing
+what could be compared.
+
+--fail-if FIGURE OP LIMIT: the run fails when `value OP LIMIT` holds.
+  FIGURE  max_strain, max_violation.{stretch,planarity,normality,curvature},
+          final_energy, steps_per_second, wall_seconds, frames, sim_seconds
+  OP      >  >=  <  <=
+  LIMIT   a number (checks every run), or relative to the first run A
+          (checks every other run): A, 1.1*A, A*1.1, A+0.002, 1.1*A-0.001
+  e.g.    --fail-if 'max_strain > 1.1*A' --fail-if 'steps_per_second < 0.8*A'")]
+pub struct CompareArgs {
+    /// Recordings (`.rrd`) written by `weft record`, `weft sweep` or the
+    /// debugger; the first is the baseline `A`.
+    #[arg(required = true, value_name = "FILE.rrd")]
+    pub files: Vec<PathBuf>,
+    /// Write the comparison recording to this `.rrd` file.
+    #[arg(long, value_name = "FILE.rrd", group = "sink")]
+    pub save: Option<PathBuf>,
+    /// Stream the comparison to a running Rerun viewer.
+    #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = crate::cli::DEFAULT_VIEWER, group = "sink")]
+    pub connect: Option<String>,
+    /// Draw the cloths on top of each other instead of side by side.
+    #[arg(long)]
+    pub overlay: bool,
+    /// The axis the cloths are set side by side along: x, y, z, or auto (of
+    /// the two the cloth spans, the one it moves least along).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "x", "y", "z"])]
+    pub axis: String,
+    /// Exit with 1 if a run crosses this bound (repeatable); see below.
+    #[arg(long = "fail-if", value_name = "BOUND")]
+    pub fail_if: Vec<Bound>,
+}
+
+/// Runs `weft compare`.
+pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
+    let runs = read_all(&args.files).map_err(anyhow::Error::msg)?;
+    let text = report::report(&runs);
+    print!("{text}");
+
+    if args.save.is_some() || args.connect.is_some() {
+        let rec = recording::open(&runs, args.save.as_deref(), args.connect.as_deref())?;
+        let placement = if args.overlay {
+            Placement::Overlay
+        } else {
+            Placement::SideBySide(match args.axis.as_str() {
+                "x" => Some(Vec3::X),
+                "y" => Some(Vec3::Y),
+                "z" => Some(Vec3::Z),
+                _ => None,
+            })
+        };
+        recording::write(&rec, &runs, placement, &text)?;
+        drop(rec);
+        if let Some(path) = &args.save {
+            println!(
+                "\ncomparison written to {} (open it with `rerun {}`)",
+                path.display(),
+                path.display()
+            );
+        }
+    }
+
+    let regressions = gate::check(&args.fail_if, &runs);
+    if !regressions.is_empty() {
+        print!("\n{}", gate::table(&regressions, &args.fail_if));
+    } else if !args.fail_if.is_empty() {
+        println!("\nno regression against {} bound(s)", args.fail_if.len());
+    }
+
+    let mut problems = Vec::new();
+    for r in runs.iter().filter(|r| r.cut_short()) {
+        problems.push(format!(
+            "{} is cut short (it holds frames up to {}{}): only what it holds was compared",
+            r.path.display(),
+            r.last_frame(),
+            if r.rec.truncated {
+                ", then the file ends mid-message"
+            } else {
+                ", and no end-of-run summary"
+            }
+        ));
+    }
+    let different: Vec<(&RunData, String)> = runs
+        .iter()
+        .skip(1)
+        .filter_map(|r| Some((r, incomparable(&runs[0], r)?)))
+        .filter(|(_, why)| why.starts_with("their scenes differ"))
+        .collect();
+    for (r, why) in different {
+        problems.push(format!(
+            "{} and {} are runs of different scenes ({}): their figures are shown, their particle states are not compared",
+            runs[0].name,
+            r.name,
+            why.trim_start_matches("their scenes differ beyond the tuning (").trim_end_matches(')')
+        ));
+    }
+    if !problems.is_empty() {
+        for p in &problems {
+            eprintln!("error: {p}");
+        }
+        return Ok(ExitCode::from(2));
+    }
+    Ok(if regressions.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}

@@ -1,0 +1,479 @@
+//! Sweeps: one preset run headless at every point of a grid of settings.
+//!
+//! A [`Plan`] is the preset, the [`grid`] of `--set` axes, the number of
+//! frames and the telemetry level. Every point is validated (loaded with its
+//! overrides) before anything runs. Each point is an independent,
+//! deterministic run ([`run_point`]) whose files live under the output
+//! directory, named after the point:
+//!
+//! | file | what |
+//! |---|---|
+//! | `sweep.json` | the manifest: preset, axes, frames, level, every point's index, name and settings |
+//! | `NAME.rrd` | the point's recording (level `summary` unless `--level`) |
+//! | `NAME.json` | the point's settings, figures and `[expect]` checks |
+//! | `NAME.rrd.part`, `NAME.json.part` | a point being written (or cut off): renamed when complete |
+//!
+//! A point is complete when `NAME.json` exists and reads back, and
+//! `NAME.rrd` exists; the JSON is renamed into place last. Re-running the
+//! same sweep skips complete points, so an interrupted sweep resumes. The
+//! manifest must match: a directory holding another sweep is refused.
+//!
+//! Points run on `--jobs` threads; since each point is a run of its own and
+//! the solver is bit-identical for any thread count, the results do not
+//! depend on `--jobs`, on the order the points finish, or on the [`shard`]
+//! that ran them. [`collect`] reads a finished (or partial) sweep back.
+
+pub mod collect;
+pub mod command;
+pub mod grid;
+pub mod shard;
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use crate::record::{Check, Figures, Run, verdict};
+use crate::scene::{Loaded, Override, Scene, load};
+use crate::telemetry::{Telemetry, blueprint};
+use grid::{Axis, Point};
+use shard::Shard;
+
+/// Above this many points (in this shard), a sweep asks for `--yes`.
+pub const MAX_POINTS: usize = 256;
+/// Above this estimated duration (of this shard), a sweep asks for `--yes`.
+pub const MAX_SECONDS: f64 = 3600.0;
+
+/// The manifest's file name.
+pub const MANIFEST: &str = "sweep.json";
+
+/// What a sweep runs.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Preset file or shipped name.
+    pub preset: String,
+    /// The axes, in command-line order.
+    pub axes: Vec<Axis>,
+    /// Frames per point (`None`: each point's preset `duration`).
+    pub frames: Option<u64>,
+    /// Seconds per point, if given instead of frames.
+    pub seconds: Option<f32>,
+    /// Telemetry level of each point's recording.
+    pub level: String,
+    /// Every point, in order, loaded.
+    pub points: Vec<(Point, Loaded)>,
+}
+
+/// The manifest, `sweep.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// The weft version that wrote it.
+    pub weft: String,
+    /// The preset.
+    pub preset: String,
+    /// Frames per point, if fixed.
+    pub frames: Option<u64>,
+    /// Seconds per point, if given.
+    pub seconds: Option<f32>,
+    /// Telemetry level.
+    pub level: String,
+    /// The axes: key and values as written.
+    pub axes: Vec<ManifestAxis>,
+    /// Every point.
+    pub points: Vec<ManifestPoint>,
+}
+
+/// One axis in the manifest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ManifestAxis {
+    /// Dotted key.
+    pub key: String,
+    /// Values, as written.
+    pub values: Vec<String>,
+}
+
+/// One point in the manifest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ManifestPoint {
+    /// Index in grid order.
+    pub index: usize,
+    /// Name (of its files).
+    pub name: String,
+    /// Key → value, as written.
+    pub settings: Vec<(String, String)>,
+}
+
+/// What a finished point wrote to `NAME.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointResult {
+    /// Index in grid order.
+    pub index: usize,
+    /// Name.
+    pub name: String,
+    /// Key → value, as written.
+    pub settings: Vec<(String, String)>,
+    /// The run's figures.
+    pub figures: Figures,
+    /// The preset's `[expect]` bounds, checked.
+    pub checks: Vec<Check>,
+}
+
+impl PointResult {
+    /// `FAILED`, `ok`, `FAIL (n)` or `no bounds`.
+    pub fn verdict(&self) -> String {
+        if self.figures.failure.is_some() || !self.figures.finite {
+            return "FAILED".into();
+        }
+        let failed = self.checks.iter().filter(|c| !c.ok).count();
+        match (self.checks.is_empty(), failed) {
+            (true, _) => "no bounds".into(),
+            (false, 0) => "ok".into(),
+            (false, n) => format!("FAIL ({n})"),
+        }
+    }
+}
+
+impl Plan {
+    /// Builds and validates the plan: every point must load.
+    pub fn new(
+        preset: &str,
+        axes: Vec<Axis>,
+        frames: Option<u64>,
+        seconds: Option<f32>,
+        level: &str,
+    ) -> Result<Self, String> {
+        grid::check(&axes)?;
+        if let Some(s) = seconds
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(format!(
+                "--seconds {s}: expected a positive number of seconds"
+            ));
+        }
+        let level_set = Override {
+            key: "telemetry.level".into(),
+            value: toml::Value::String(level.into()),
+        };
+        let mut points = Vec::new();
+        for p in grid::points(&axes) {
+            let mut sets = p.overrides.clone();
+            sets.push(level_set.clone());
+            let loaded = load::load(preset, &sets).map_err(|e| {
+                let at = p
+                    .settings
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                format!("{e}\n  (at point {} of the sweep: {at})", p.index)
+            })?;
+            points.push((p, loaded));
+        }
+        Ok(Self {
+            preset: preset.into(),
+            axes,
+            frames,
+            seconds,
+            level: level.into(),
+            points,
+        })
+    }
+
+    /// The manifest of this plan.
+    pub fn manifest(&self) -> Manifest {
+        Manifest {
+            weft: env!("CARGO_PKG_VERSION").into(),
+            preset: self.preset.clone(),
+            frames: self.frames,
+            seconds: self.seconds,
+            level: self.level.clone(),
+            axes: self
+                .axes
+                .iter()
+                .map(|a| ManifestAxis {
+                    key: a.key.clone(),
+                    values: a.texts.clone(),
+                })
+                .collect(),
+            points: self
+                .points
+                .iter()
+                .map(|(p, _)| ManifestPoint {
+                    index: p.index,
+                    name: p.name.clone(),
+                    settings: p.settings.clone(),
+                })
+                .collect(),
+        }
+    }
+
+    /// The frames a point runs.
+    pub fn frames_of(&self, loaded: &Loaded, scene: &Scene) -> u64 {
+        match (self.frames, self.seconds) {
+            (Some(n), _) => n,
+            (None, Some(s)) => scene.frames_in(s),
+            (None, None) => scene.frames_in(loaded.preset.duration),
+        }
+    }
+
+    /// Estimated wall seconds for the points of `shard` on `jobs` threads:
+    /// a few frames of up to [`SAMPLES`] points spread over the grid are
+    /// timed here (without telemetry), since points differ in cost.
+    pub fn estimate(&self, shard: Option<Shard>, jobs: usize) -> f64 {
+        let mine: Vec<&(Point, Loaded)> = self
+            .points
+            .iter()
+            .filter(|(p, _)| shard.is_none_or(|s| s.contains(p.index)))
+            .collect();
+        if mine.is_empty() {
+            return 0.0;
+        }
+        let frames_of = |l: &Loaded| -> u64 {
+            match (self.frames, self.seconds) {
+                (Some(n), _) => n,
+                (None, Some(s)) => (s / l.preset.solver.dt).round().max(1.0) as u64,
+                (None, None) => (l.preset.duration / l.preset.solver.dt).round().max(1.0) as u64,
+            }
+        };
+        let picks = SAMPLES.min(mine.len());
+        let mut seconds = 0.0;
+        for k in 0..picks {
+            let (_, loaded) = mine[k * (mine.len() - 1) / (picks - 1).max(1)];
+            let start = Instant::now();
+            let Ok(mut scene) = Scene::new(&loaded.preset) else {
+                continue;
+            };
+            let setup = start.elapsed().as_secs_f64();
+            let sample = 3.min(frames_of(loaded));
+            let start = Instant::now();
+            for _ in 0..sample {
+                if scene.step().is_err() {
+                    break;
+                }
+            }
+            let per_frame = start.elapsed().as_secs_f64() / sample.max(1) as f64;
+            seconds += setup + per_frame * frames_of(loaded) as f64;
+        }
+        seconds / picks as f64 * mine.len() as f64 / jobs.clamp(1, mine.len()) as f64
+    }
+}
+
+/// How many points [`Plan::estimate`] times.
+pub const SAMPLES: usize = 6;
+
+/// Writes `bytes` to `path` through `path.part` and a rename, so `path`
+/// exists only complete.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let part = part_path(path);
+    std::fs::write(&part, bytes).map_err(|e| format!("writing {}: {e}", part.display()))?;
+    std::fs::rename(&part, path).map_err(|e| format!("renaming {} into place: {e}", part.display()))
+}
+
+/// `NAME.rrd` → `NAME.rrd.part`.
+pub fn part_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".part");
+    PathBuf::from(s)
+}
+
+/// Creates `dir` and writes the manifest, or checks that the one there is
+/// this sweep's. Nothing in `dir` is removed or overwritten otherwise.
+pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let path = dir.join(MANIFEST);
+    let json = serde_json::to_string_pretty(manifest).expect("manifest serializes");
+    match std::fs::read_to_string(&path) {
+        Ok(old) => {
+            let old: Manifest = serde_json::from_str(&old).map_err(|e| {
+                format!(
+                    "{}: not a weft sweep manifest ({e}); use another --out",
+                    path.display()
+                )
+            })?;
+            if old != *manifest {
+                let what = if old.weft != manifest.weft {
+                    format!(
+                        "written by weft {}, this is weft {}: its results may differ",
+                        old.weft, manifest.weft
+                    )
+                } else if old.preset != manifest.preset {
+                    format!("preset {} instead of {}", old.preset, manifest.preset)
+                } else if old.axes != manifest.axes {
+                    "other --set values".to_string()
+                } else {
+                    "other frames, seconds or level".to_string()
+                };
+                return Err(format!(
+                    "{} holds another sweep ({what}); its points are kept: use another --out, or delete it to start over",
+                    dir.display()
+                ));
+            }
+            Ok(())
+        }
+        Err(_) => {
+            // Several shards may start at once: each writes through its own
+            // temporary name, and the renames all put the same bytes in place.
+            let tmp = dir.join(format!(".{MANIFEST}.{}", std::process::id()));
+            std::fs::write(&tmp, &json)
+                .map_err(|e| format!("cannot write in {}: {e}", dir.display()))?;
+            std::fs::rename(&tmp, &path).map_err(|e| format!("writing {}: {e}", path.display()))
+        }
+    }
+}
+
+/// Whether the point's files are complete.
+pub fn is_complete(dir: &Path, name: &str) -> bool {
+    let json = dir.join(format!("{name}.json"));
+    dir.join(format!("{name}.rrd")).is_file()
+        && std::fs::read_to_string(json)
+            .ok()
+            .and_then(|t| serde_json::from_str::<PointResult>(&t).ok())
+            .is_some()
+}
+
+/// Runs one point and writes its files. A solver failure is a result (in the
+/// figures), not an error; errors are about files.
+pub fn run_point(
+    plan: &Plan,
+    point: &Point,
+    loaded: &Loaded,
+    dir: &Path,
+) -> Result<PointResult, String> {
+    let rrd = dir.join(format!("{}.rrd", point.name));
+    let part = part_path(&rrd);
+    let scene = Scene::new(&loaded.preset).map_err(|e| format!("{}: {e}", point.name))?;
+    let frames = plan.frames_of(loaded, &scene);
+    let stream = rerun::RecordingStreamBuilder::new("weft")
+        .with_default_blueprint(blueprint::default())
+        .save(&part)
+        .map_err(|e| format!("cannot write {}: {e}", part.display()))?;
+    let telemetry = Telemetry::new(stream.clone(), loaded.preset.telemetry);
+    let never = AtomicBool::new(false);
+    let mut run = Run::start(scene, telemetry, &plan.preset, &loaded.resolved)
+        .map_err(|e| format!("{}: {e}", point.name))?;
+    let outcome = run.run(frames, &never, |_| {});
+    if let Err(crate::record::RunError::Telemetry(e)) = &outcome {
+        return Err(format!("{}: {e}", point.name));
+    }
+    let figures = run.finish().map_err(|e| format!("{}: {e}", point.name))?;
+    stream.flush_blocking().ok();
+    drop(stream);
+    std::fs::rename(&part, &rrd)
+        .map_err(|e| format!("renaming {} into place: {e}", part.display()))?;
+    let checks = loaded
+        .preset
+        .expect
+        .map(|e| verdict(&e, &figures))
+        .unwrap_or_default();
+    let result = PointResult {
+        index: point.index,
+        name: point.name.clone(),
+        settings: point.settings.clone(),
+        figures,
+        checks,
+    };
+    let json = serde_json::to_string_pretty(&result).expect("result serializes");
+    write_atomically(&dir.join(format!("{}.json", point.name)), json.as_bytes())?;
+    Ok(result)
+}
+
+/// What the sweep reports while it runs.
+#[derive(Clone, Debug)]
+pub enum Progress {
+    /// How many points this shard has, and how many were already complete.
+    Start {
+        /// Points in this shard.
+        total: usize,
+        /// Already complete (skipped).
+        skipped: usize,
+    },
+    /// A point finished.
+    Done(Box<PointResult>, Duration),
+    /// A point could not be written.
+    Error(String),
+}
+
+/// How a sweep ended.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outcome {
+    /// Points run now.
+    pub ran: usize,
+    /// Points skipped as already complete.
+    pub skipped: usize,
+    /// Points not run because of `stop`.
+    pub left: usize,
+    /// Points that could not be written.
+    pub errors: Vec<String>,
+}
+
+/// Runs the points of `shard` (all without one) that are not complete in
+/// `dir`, on `jobs` threads; no new point starts once `stop` is set.
+pub fn run(
+    plan: &Plan,
+    dir: &Path,
+    shard: Option<Shard>,
+    jobs: usize,
+    stop: &AtomicBool,
+    mut progress: impl FnMut(Progress),
+) -> Result<Outcome, String> {
+    prepare(dir, &plan.manifest())?;
+    let mine: Vec<&(Point, Loaded)> = plan
+        .points
+        .iter()
+        .filter(|(p, _)| shard.is_none_or(|s| s.contains(p.index)))
+        .collect();
+    let todo: Vec<&(Point, Loaded)> = mine
+        .iter()
+        .copied()
+        .filter(|(p, _)| !is_complete(dir, &p.name))
+        .collect();
+    let mut outcome = Outcome {
+        skipped: mine.len() - todo.len(),
+        ..Outcome::default()
+    };
+    progress(Progress::Start {
+        total: mine.len(),
+        skipped: outcome.skipped,
+    });
+    let next = AtomicUsize::new(0);
+    let (tx, rx) = mpsc::channel();
+    std::thread::scope(|s| {
+        for _ in 0..jobs.clamp(1, todo.len().max(1)) {
+            let tx = tx.clone();
+            let (todo, next) = (&todo, &next);
+            s.spawn(move || {
+                loop {
+                    if stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some((point, loaded)) = todo.get(k) else {
+                        break;
+                    };
+                    let start = Instant::now();
+                    let r = run_point(plan, point, loaded, dir);
+                    if tx.send(r.map(|r| (r, start.elapsed()))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        for r in rx {
+            match r {
+                Ok((r, t)) => {
+                    outcome.ran += 1;
+                    progress(Progress::Done(Box::new(r), t));
+                }
+                Err(e) => {
+                    outcome.errors.push(e.clone());
+                    progress(Progress::Error(e));
+                }
+            }
+        }
+    });
+    outcome.left = todo.len() - outcome.ran - outcome.errors.len();
+    Ok(outcome)
+}

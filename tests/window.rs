@@ -1,0 +1,113 @@
+//! The whole window, for real: `weft gui --screenshot` under Xvfb (a
+//! virtual X display; Debian's `xvfb`), rendered by wgpu on Mesa's
+//! llvmpipe. The picture comes from egui's screenshot command, so it does
+//! not depend on how X presents the window.
+//!
+//! `UPDATE_SNAPSHOTS=1 cargo test --test window` also copies the picture to
+//! `tests/snapshots/window.png` (shown in the README). It is not compared
+//! pixel for pixel: the panel shows timings.
+#![cfg(feature = "viewer")]
+
+use std::process::Command;
+
+/// The fraction of pixels in a region of `img` for which `f` holds.
+fn share(img: &image::RgbaImage, x: (f32, f32), y: (f32, f32), f: impl Fn([u8; 4]) -> bool) -> f32 {
+    let (w, h) = (img.width() as f32, img.height() as f32);
+    let (x0, x1) = ((x.0 * w) as u32, (x.1 * w) as u32);
+    let (y0, y1) = ((y.0 * h) as u32, (y.1 * h) as u32);
+    let mut hits = 0;
+    for py in y0..y1 {
+        for px in x0..x1 {
+            hits += f(img.get_pixel(px, py).0) as u32;
+        }
+    }
+    hits as f32 / ((x1 - x0) * (y1 - y0)) as f32
+}
+
+#[test]
+fn the_window_shows_the_cloth_and_the_panel() {
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("window.png");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1600x1000x24"])
+        .arg(env!("CARGO_BIN_EXE_weft"))
+        .args([
+            "gui",
+            "flag_on_car",
+            "--set",
+            "solver.weights.curvature=0.35",
+        ])
+        .arg("--screenshot")
+        .arg(&shot)
+        .args(["--frames", "60"])
+        .env_remove("WAYLAND_DISPLAY")
+        .current_dir(dir.path())
+        .output()
+        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "weft gui --screenshot failed:\n{stderr}"
+    );
+    assert!(stderr.contains("saved the window"), "{stderr}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!((img.width(), img.height()), (1400, 860));
+
+    // The 3D view (left of the plots): the cloth's particles, coloured by
+    // strain (the ramp starts blue), on the scene's ground and car.
+    let view = ((0.15, 0.39), (0.07, 0.66));
+    let cloth = share(&img, view.0, view.1, |[r, g, b, _]| {
+        b > 150 && r < 110 && g < 140
+    });
+    assert!(cloth > 2e-4, "no cloth in the 3D view ({cloth})");
+    let lit = share(&img, view.0, view.1, |[r, g, b, _]| {
+        r as u32 + g as u32 + b as u32 > 150
+    });
+    assert!(lit > 0.2, "the 3D view is dark ({lit})");
+    // The panel on the right: light text on dark.
+    let text = share(&img, (0.78, 1.0), (0.0, 1.0), |[r, g, b, _]| {
+        r > 150 && g > 150 && b > 150
+    });
+    assert!(text > 0.005, "no panel ({text})");
+
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
+        let target = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/snapshots/window.png");
+        std::fs::copy(&shot, target).unwrap();
+    }
+}
+
+/// `weft gui --set` validates like `record`: a bad key fails before any
+/// window opens, naming the key and suggesting the nearest one.
+#[test]
+fn gui_set_is_validated_before_the_window_opens() {
+    let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(["gui", "flag_on_car", "--set", "solver.weights.curvatre=0.3"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--set solver.weights.curvatre"), "{stderr}");
+    assert!(stderr.contains("did you mean `curvature`"), "{stderr}");
+}
+
+/// A log backend is installed: `RUST_LOG` reaches Rerun's and wgpu's logs
+/// (here the SDK's debug message when it opens the file).
+#[test]
+fn rust_log_is_honoured() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a.rrd");
+    let run = |level: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+            .args(["record", "hanging_sheet", "--frames", "2", "--save"])
+            .arg(&file)
+            .env("RUST_LOG", level)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    assert!(run("debug").contains("DEBUG"));
+    assert!(!run("warn").contains("DEBUG"));
+}
