@@ -90,7 +90,7 @@ fn step_by_size(c: &mut Criterion) {
     g.sample_size(20);
     for n in [32u32, 64, 128, 256] {
         g.throughput(Throughput::Elements((n * n) as u64));
-        let mut s = weft_sheet(n, Weights::default());
+        let mut s = weft_sheet(n, Weights::default_weights());
         g.bench_with_input(BenchmarkId::new("weft", n), &n, |b, _| {
             b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
         });
@@ -110,7 +110,7 @@ fn threads(c: &mut Criterion) {
             .num_threads(threads)
             .build()
             .unwrap();
-        let mut s = pool.install(|| weft_sheet(128, Weights::default()));
+        let mut s = pool.install(|| weft_sheet(128, Weights::default_weights()));
         g.bench_with_input(
             BenchmarkId::new("weft 128x128", threads),
             &threads,
@@ -128,14 +128,7 @@ fn per_family(c: &mut Criterion) {
     let mut g = c.benchmark_group("family 64x64");
     g.sample_size(20);
     for f in Family::ALL {
-        let mut weights = Weights {
-            stretch: 0.0,
-            planarity: 0.0,
-            normality: 0.0,
-            curvature: 0.0,
-        };
-        *weights.get_mut(f) = 1.0;
-        let mut s = weft_sheet(64, weights);
+        let mut s = weft_sheet(64, Weights::splat(0.0).with(f, 1.0));
         g.bench_function(f.name(), |b| {
             b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
         });

@@ -72,7 +72,7 @@ pub fn verdict(expect: &Expect, figures: &Figures) -> Vec<Check> {
         check("expect.max_strain".into(), limit, figures.max_strain);
     }
     for f in Family::ALL {
-        if let Some(limit) = expect.max_violation.get(f) {
+        if let Some(limit) = expect.max_violation[f] {
             let value = figures.max_violation.get(f.name()).copied().unwrap_or(0.0);
             check(format!("expect.max_violation.{}", f.name()), limit, value);
         }

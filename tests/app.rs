@@ -12,6 +12,7 @@ use weft::app::{
     session::{BranchAt, Command, Session},
 };
 use weft::scene::load;
+use weft::solver::Family;
 use weft::telemetry::{paths, read};
 
 struct State {
@@ -107,7 +108,10 @@ fn a_slider_changes_the_solver_and_the_recording() {
     click(&mut h, "Step");
     assert!(h.state().session.wait_for(WAIT, |s| s.frame == 3));
     let status = h.state().session.status();
-    assert_eq!(status.preset.unwrap().solver.weights.curvature, 0.35);
+    assert_eq!(
+        status.preset.unwrap().solver.weights[Family::Curvature],
+        0.35
+    );
 
     h.run();
     click(&mut h, "Stop recording");
@@ -155,7 +159,10 @@ fn a_rejected_value_shows_its_message_and_changes_nothing() {
     h.get_by_label_contains("solver.weights.curvature");
     h.get_by_label_contains("out of range");
     let status = h.state().session.status();
-    assert_eq!(status.preset.unwrap().solver.weights.curvature, 0.1);
+    assert_eq!(
+        status.preset.unwrap().solver.weights[Family::Curvature],
+        0.1
+    );
 
     // The free-form field validates like --set, suggesting the nearest key.
     let field = h
@@ -168,14 +175,7 @@ fn a_rejected_value_shows_its_message_and_changes_nothing() {
     click(&mut h, "Apply");
     h.get_by_label_contains("did you mean `curvature`");
     assert_eq!(
-        h.state()
-            .session
-            .status()
-            .preset
-            .unwrap()
-            .solver
-            .weights
-            .curvature,
+        h.state().session.status().preset.unwrap().solver.weights[Family::Curvature],
         0.1
     );
 }
@@ -200,7 +200,7 @@ fn saving_a_preset_loads_back_identically() {
     let saved = load::load(path.to_str().unwrap(), &[]).unwrap().preset;
     let live = h.state().session.status().preset.unwrap();
     assert_eq!(saved, live);
-    assert_eq!(saved.solver.weights.normality, 0.45);
+    assert_eq!(saved.solver.weights[Family::Normality], 0.45);
     assert_eq!(saved.solver.iterations, 7);
 }
 
@@ -354,7 +354,7 @@ fn a_branch_is_bit_identical_up_to_its_frame() {
     // A change at frame 50 is part of the parent's story, replayed too.
     step_to(49);
     let mut t = tuning(&session.status());
-    t.solver.weights.normality = 0.4;
+    t.solver.weights[Family::Normality] = 0.4;
     session.send(Command::Tune(t));
     let at_55 = step_to(55);
     let at_100 = step_to(100);
@@ -387,7 +387,7 @@ fn a_branch_is_bit_identical_up_to_its_frame() {
     // Higher curvature from frame 60: a different run after it.
     step_to(60);
     let mut t = tuning(&session.status());
-    t.solver.weights.curvature = 0.35;
+    t.solver.weights[Family::Curvature] = 0.35;
     session.send(Command::Tune(t));
     session.send(Command::Branch(BranchAt::Frame(60)));
     assert!(session.wait_for(WAIT, |s| s.run.number == 4 && s.frame == 60));
@@ -536,7 +536,7 @@ fn the_inspector_shows_the_selected_particle() {
     h.run();
     let p = h.state().session.status().particle.unwrap();
     assert_eq!(p.cell, (tip as u32, 0));
-    assert!(p.dx.iter().any(|d| d.length() > 0.0), "{p:?}");
+    assert!(p.dx.iter().any(|(_, d)| d.length() > 0.0), "{p:?}");
     h.get_by_label_contains(&format!("(i, j) = ({tip}, 0)"));
     h.get_by_label("|δx| (mm)");
     h.state().session.send(Command::StopRecording);
@@ -600,7 +600,7 @@ fn saving_writes_a_small_preset_that_extends_the_shipped_one() {
     h.run();
     set_slider(&mut h, "λ curvature", 0.35);
     assert!(h.state().session.wait_for(WAIT, |s| {
-        s.preset.as_ref().unwrap().solver.weights.curvature == 0.35
+        s.preset.as_ref().unwrap().solver.weights[Family::Curvature] == 0.35
     }));
     click(&mut h, "Save preset");
     h.get_by_label_contains("saved");

@@ -9,7 +9,9 @@
 //! are the tables in `docs/method.md`.
 
 use glam::{Quat, Vec3};
-use weft::solver::{ClothSpec, Collider, Environment, Params, Pose, Shape, Solver, Weights};
+use weft::solver::{
+    ClothSpec, Collider, Environment, Family, Params, Pose, Shape, Solver, Weights,
+};
 
 /// Gravity only: no air, no wind.
 fn vacuum() -> Environment {
@@ -167,10 +169,7 @@ fn projected_area(s: &Solver) -> f32 {
 
 fn with_curvature(curvature: f32) -> Params {
     Params {
-        weights: Weights {
-            curvature,
-            ..Weights::default()
-        },
+        weights: Weights::default_weights().with(Family::Curvature, curvature),
         ..Params::default()
     }
 }
@@ -286,11 +285,10 @@ fn the_oriented_families_change_the_drape() {
     let off = drape(
         24,
         Params {
-            weights: Weights {
-                planarity: 0.0,
-                normality: 0.0,
-                ..with_curvature(0.5).weights
-            },
+            weights: with_curvature(0.5)
+                .weights
+                .with(Family::Planarity, 0.0)
+                .with(Family::Normality, 0.0),
             ..Params::default()
         },
     );

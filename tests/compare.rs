@@ -10,6 +10,7 @@ use weft::compare::gate::{Bound, Limit, check};
 use weft::compare::{RunData, read_all, state_diff};
 use weft::record::Run;
 use weft::scene::{Override, Scene, load};
+use weft::solver::Family;
 use weft::telemetry::{Telemetry, read};
 
 fn weft() -> Command {
@@ -62,7 +63,7 @@ fn record(
             && run.scene.frame() + 1 == at
         {
             let mut p = *run.scene.solver().params();
-            p.weights.curvature = curvature;
+            p.weights[Family::Curvature] = curvature;
             run.set_params(p).unwrap();
         }
         run.step().unwrap();

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use weft::scene::{Scene, load, shipped};
-use weft::solver::Shape;
+use weft::solver::{Family, Shape};
 
 fn loaded(name: &str) -> load::Loaded {
     load::load(name, &[]).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -236,8 +236,8 @@ fn extend_and_set_round_trip() {
     let p = &loaded.preset;
     assert_eq!(p.description, "child");
     assert_eq!((p.cloth.weft, p.cloth.warp, p.cloth.width), (6, 5, 2.5));
-    assert_eq!(p.solver.weights.curvature, 0.3);
-    assert_eq!(p.solver.weights.normality, 0.7);
+    assert_eq!(p.solver.weights[Family::Curvature], 0.3);
+    assert_eq!(p.solver.weights[Family::Normality], 0.7);
     assert_eq!(p.solver.iterations, 12);
     assert_eq!(p.telemetry.level, weft::scene::preset::Level::Summary);
     // The resolved text stands alone and loads back to the same preset.
@@ -282,4 +282,38 @@ fn extend_and_set_round_trip() {
             .to_string()
             .contains("cycle")
     );
+}
+
+/// Per-family tables (`[solver.weights]`, `[expect.max_violation]`,
+/// `telemetry.corrections`): a missing family keeps its default, an unknown
+/// one is located and named, and the text written back is the same format.
+#[test]
+fn per_family_tables_keep_defaults_and_refuse_unknown_families() {
+    let p = load_text(
+        "description = \"x\"\n[cloth]\n[solver.weights]\ncurvature = 0.3\n\
+         [telemetry.corrections]\nstretch = false\n[expect.max_violation]\nplanarity = 0.5\n",
+    )
+    .unwrap()
+    .preset;
+    let w = &p.solver.weights;
+    assert_eq!(w[Family::Curvature], 0.3);
+    assert_eq!(w[Family::Stretch], 1.0);
+    assert_eq!(w[Family::Planarity], 0.5);
+    assert_eq!(w[Family::Normality], 0.2);
+    assert!(!p.telemetry.corrections[Family::Stretch]);
+    assert!(p.telemetry.corrections[Family::Curvature]);
+    let bounds = p.expect.unwrap().max_violation;
+    assert_eq!(bounds[Family::Planarity], Some(0.5));
+    assert_eq!(bounds[Family::Stretch], None);
+    let text = load::to_toml(&p);
+    assert!(text.contains("planarity = 0.5"), "{text}");
+    assert!(!text.contains("stretch = nan"), "{text}");
+    assert_eq!(load_text(&text).unwrap().preset, p);
+
+    let err = load_text("description = \"x\"\n[cloth]\n[solver.weights]\ncurvatur = 0.3\n")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains(":4:"), "{err}");
+    assert!(err.contains("curvatur"), "{err}");
+    assert!(err.contains("curvature"), "{err}");
 }

@@ -341,7 +341,7 @@ fn replay_reproduces_the_final_state_bit_for_bit() {
             let frame = run.scene.frame();
             let mut p = *run.scene.solver().params();
             if frame == 10 {
-                p.weights.curvature = 0.4;
+                p.weights[Family::Curvature] = 0.4;
             }
             if frame == 20 {
                 p.iterations = 6;

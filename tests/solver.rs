@@ -55,13 +55,7 @@ fn perturb(solver: &mut Solver, seed: u64, dx: f32, dtheta: f32) {
 }
 
 fn only(family: Family) -> Params {
-    let mut weights = Weights {
-        stretch: 0.0,
-        planarity: 0.0,
-        normality: 0.0,
-        curvature: 0.0,
-    };
-    *weights.get_mut(family) = 1.0;
+    let weights = Weights::splat(0.0).with(family, 1.0);
     Params {
         weights,
         damping: 0.0,
@@ -219,12 +213,7 @@ fn no_forced_rotation_exceeds_phi_in_the_solver() {
     let params = Params {
         phi,
         h: Width::Fixed(0.0),
-        weights: Weights {
-            stretch: 1.0,
-            planarity: 1.0,
-            normality: 1.0,
-            curvature: 1.0,
-        },
+        weights: Weights::splat(1.0),
         ..Params::default()
     };
     let mut s = Solver::new(spec(10), params, &[]).unwrap();
@@ -291,12 +280,10 @@ fn mean_bend_angle(curvature: f32) -> f32 {
         ..spec(16)
     };
     let params = Params {
-        weights: Weights {
-            curvature,
-            planarity: 0.0,
-            normality: 0.0,
-            ..Weights::default()
-        },
+        weights: Weights::default_weights()
+            .with(Family::Curvature, curvature)
+            .with(Family::Planarity, 0.0)
+            .with(Family::Normality, 0.0),
         ..Params::default()
     };
     let mut s = Solver::new(spec, params, &[Pose::IDENTITY]).unwrap();
@@ -516,10 +503,12 @@ fn every_rejected_parameter_has_its_own_message() {
     let cases: &[(&str, Mutator)] = &[
         ("damping", |p| p.damping = 1.5),
         ("damping", |p| p.damping = f32::NAN),
-        ("weights.stretch", |p| p.weights.stretch = -0.1),
-        ("weights.planarity", |p| p.weights.planarity = 2.0),
-        ("weights.normality", |p| p.weights.normality = f32::INFINITY),
-        ("weights.curvature", |p| p.weights.curvature = 1.01),
+        ("weights.stretch", |p| p.weights[Family::Stretch] = -0.1),
+        ("weights.planarity", |p| p.weights[Family::Planarity] = 2.0),
+        ("weights.normality", |p| {
+            p.weights[Family::Normality] = f32::INFINITY
+        }),
+        ("weights.curvature", |p| p.weights[Family::Curvature] = 1.01),
         ("phi", |p| p.phi = 4.0),
         ("h", |p| p.h = Width::Fixed(-1.0)),
         ("h", |p| p.h = Width::Fixed(f32::NAN)),

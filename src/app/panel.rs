@@ -365,7 +365,7 @@ impl Panel {
                 row(ui, "steps/s", format!("{:.0}", status.steps_per_second));
                 row(ui, "step time", format!("{:.2} ms", status.step_ms));
                 row(ui, "max strain", format!("{:.4}", status.max_strain));
-                for (f, v) in Family::ALL.iter().zip(status.max_violation) {
+                for (f, v) in status.max_violation.iter() {
                     row(ui, &format!("max {}", f.name()), format!("{v:.4}"));
                 }
                 row(
@@ -447,11 +447,10 @@ impl Panel {
                 ui.label("|δθ| (mrad)");
                 ui.end_row();
                 for f in Family::ALL {
-                    let k = f.index();
                     ui.label(f.name());
-                    ui.monospace(format!("{:.4}", p.violation[k]));
-                    ui.monospace(format!("{:.4}", p.dx[k].length() * 1e3));
-                    ui.monospace(format!("{:.4}", p.dtheta[k].length() * 1e3));
+                    ui.monospace(format!("{:.4}", p.violation[f]));
+                    ui.monospace(format!("{:.4}", p.dx[f].length() * 1e3));
+                    ui.monospace(format!("{:.4}", p.dtheta[f].length() * 1e3));
                     ui.end_row();
                 }
             });
@@ -485,14 +484,9 @@ impl Panel {
                 .clamping(free)
                 .text("k damping"),
         );
-        for f in [
-            Family::Stretch,
-            Family::Planarity,
-            Family::Normality,
-            Family::Curvature,
-        ] {
+        for f in Family::BY_INDEX {
             ui.add(
-                Slider::new(p.weights.get_mut(f), 0.0..=1.0)
+                Slider::new(&mut p.weights[f], 0.0..=1.0)
                     .clamping(free)
                     .text(format!("λ {}", f.name())),
             );
@@ -586,13 +580,8 @@ impl Panel {
             });
         ui.horizontal_wrapped(|ui| {
             ui.label("corrections:");
-            for f in [
-                Family::Stretch,
-                Family::Planarity,
-                Family::Normality,
-                Family::Curvature,
-            ] {
-                ui.checkbox(t.corrections.get_mut(f), f.name());
+            for f in Family::BY_INDEX {
+                ui.checkbox(&mut t.corrections[f], f.name());
             }
         });
         ui.add(

@@ -28,7 +28,7 @@ use super::history::History;
 use super::preset_diff;
 use crate::record::{Check, Run, Snapshot, verdict};
 use crate::scene::{Loaded, Preset, Scene, Tuning, load, preset::TelemetrySettings};
-use crate::solver::Family;
+use crate::solver::{Family, PerFamily};
 use crate::telemetry::{Telemetry, blueprint};
 
 /// What the panel asks of the session.
@@ -92,13 +92,12 @@ pub struct ParticleReadout {
     pub cell: (u32, u32),
     /// Largest strain of its weft and warp edges.
     pub strain: f32,
-    /// Per family (in [`Family::index`] order), the largest violation of
-    /// the constraints that involve it.
-    pub violation: [f32; 4],
+    /// Per family, the largest violation of the constraints that involve it.
+    pub violation: PerFamily<f32>,
     /// Per family, the translation applied to it in the last adjust.
-    pub dx: [Vec3; 4],
+    pub dx: PerFamily<Vec3>,
     /// Per family, the rotation applied to it (axis × angle, radians).
-    pub dtheta: [Vec3; 4],
+    pub dtheta: PerFamily<Vec3>,
 }
 
 /// What the session reports to the panel.
@@ -124,8 +123,8 @@ pub struct Status {
     pub steps_per_second: f32,
     /// Wall time of the last step, in milliseconds.
     pub step_ms: f32,
-    /// Violation after the last step, per family (in [`Family::ALL`] order).
-    pub max_violation: [f32; 4],
+    /// Violation after the last step, per family.
+    pub max_violation: PerFamily<f32>,
     /// Largest edge strain after the last step.
     pub max_strain: f32,
     /// Digest of the current state (see `ClothState::digest`), in hex.
@@ -286,7 +285,7 @@ enum Start {
 /// A run's plotted values per frame (from frame 1): simulated time, max
 /// strain, kinetic energy and each family's max violation (in
 /// [`Family::index`] order).
-pub type Series = Vec<(u64, f64, [f32; 6])>;
+pub type Series = Vec<(u64, f64, [f32; 2 + Family::COUNT])>;
 
 struct Worker {
     run: Run,
@@ -612,19 +611,13 @@ impl Worker {
                 self.history
                     .stepped(frame, run.scene.time(), || run.snapshot());
                 if let Some(d) = run.scene.solver().diagnostics() {
-                    let v = |f: Family| d.family(f).violation.max;
-                    self.series.push((
-                        frame,
-                        run.scene.time(),
-                        [
-                            d.max_strain,
-                            d.kinetic_energy,
-                            v(Family::Stretch),
-                            v(Family::Planarity),
-                            v(Family::Normality),
-                            v(Family::Curvature),
-                        ],
-                    ));
+                    let mut values = [0.0; 2 + Family::COUNT];
+                    values[0] = d.max_strain;
+                    values[1] = d.kinetic_energy;
+                    for f in Family::ALL {
+                        values[2 + f.index()] = d.family(f).violation.max;
+                    }
+                    self.series.push((frame, run.scene.time(), values));
                 }
             }
             Err(e) => {
@@ -688,7 +681,7 @@ impl Worker {
             violations: scene
                 .solver()
                 .diagnostics()
-                .map(|d| (Family::ALL.map(|f| d.family(f).violation.max), d.max_strain)),
+                .map(|d| (d.families.map(|_, f| f.violation.max), d.max_strain)),
             digest: figures.final_state,
             checks,
             checkpoints: self.history.checkpoints(),
@@ -704,7 +697,7 @@ struct Progress {
     playing: bool,
     speed: f32,
     steps_per_second: f32,
-    violations: Option<([f32; Family::ALL.len()], f32)>,
+    violations: Option<(PerFamily<f32>, f32)>,
     digest: String,
     checks: Vec<Check>,
     checkpoints: (usize, u64),
@@ -920,10 +913,10 @@ fn readout(scene: &Scene, i: usize) -> ParticleReadout {
         ..ParticleReadout::default()
     };
     for f in Family::ALL {
-        r.violation[f.index()] = solver.particle_violation(f)[i];
+        r.violation[f] = solver.particle_violation(f)[i];
         if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
-            r.dx[f.index()] = d.family(f).dx[i];
-            r.dtheta[f.index()] = d.family(f).dtheta[i];
+            r.dx[f] = d.family(f).dx[i];
+            r.dtheta[f] = d.family(f).dtheta[i];
         }
     }
     r

@@ -15,10 +15,10 @@ use std::time::Duration;
 use glam::Vec3;
 
 use super::{
-    Family,
     cloth::ClothState,
-    constraints::{Recorder, curvature, normality, planarity, stretch},
-    topology::{Batched, Topology},
+    constraints::Recorder,
+    family::{Family, PerFamily},
+    topology::Topology,
 };
 
 /// Max and RMS of a family's violation over its pairs.
@@ -28,6 +28,26 @@ pub struct Violation {
     pub max: f32,
     /// Root mean square of the violations.
     pub rms: f32,
+}
+
+impl Violation {
+    /// Max and RMS of some violations (0 for none).
+    pub fn of(values: impl Iterator<Item = f32>) -> Self {
+        let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
+        for v in values {
+            max = max.max(v);
+            sum += (v as f64) * (v as f64);
+            n += 1;
+        }
+        Violation {
+            max,
+            rms: if n == 0 {
+                0.0
+            } else {
+                (sum / n as f64).sqrt() as f32
+            },
+        }
+    }
 }
 
 /// What one family did in the last adjust phase.
@@ -59,8 +79,8 @@ pub struct Timings {
 /// Everything a step reports when diagnostics are on.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Diagnostics {
-    /// Per family, indexed by [`Family::index`].
-    pub families: [FamilyDiagnostics; 4],
+    /// Per family.
+    pub families: PerFamily<FamilyDiagnostics>,
     /// Whether the per-particle corrections (`dx`, `dtheta`, `max_rotation`)
     /// are recorded; without them the figures and timings still are, at
     /// less cost.
@@ -80,7 +100,7 @@ impl Diagnostics {
             corrections: true,
             ..Self::default()
         };
-        for f in &mut d.families {
+        for f in d.families.iter_mut() {
             f.dx = vec![Vec3::ZERO; n];
             f.dtheta = vec![Vec3::ZERO; n];
         }
@@ -89,7 +109,7 @@ impl Diagnostics {
 
     /// One family's diagnostics.
     pub fn family(&self, family: Family) -> &FamilyDiagnostics {
-        &self.families[family.index()]
+        &self.families[family]
     }
 
     /// Clears per-particle corrections before an adjust phase.
@@ -97,7 +117,7 @@ impl Diagnostics {
         if !self.corrections {
             return;
         }
-        for f in &mut self.families {
+        for f in self.families.iter_mut() {
             f.dx.fill(Vec3::ZERO);
             f.dtheta.fill(Vec3::ZERO);
         }
@@ -105,7 +125,7 @@ impl Diagnostics {
 
     /// Clears the per-step figures before a step.
     pub(crate) fn clear_step(&mut self) {
-        for f in &mut self.families {
+        for f in self.families.iter_mut() {
             f.max_rotation = 0.0;
             f.time = Duration::ZERO;
         }
@@ -167,40 +187,6 @@ impl Recorder for FamilyRecorder {
     }
 }
 
-fn stats<T: Copy>(sets: &[&Batched<T>], f: impl Fn(T) -> f32) -> Violation {
-    let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
-    for set in sets {
-        for &p in &set.items {
-            let v = f(p);
-            max = max.max(v);
-            sum += (v as f64) * (v as f64);
-            n += 1;
-        }
-    }
-    Violation {
-        max,
-        rms: if n == 0 {
-            0.0
-        } else {
-            (sum / n as f64).sqrt() as f32
-        },
-    }
-}
-
-/// The violation of one family over the pairs it constrains.
-pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Violation {
-    let x = &state.position;
-    let normal = |i| state.normal(i);
-    match family {
-        Family::Stretch => stats(&[&topology.structural], |p| stretch::violation(x, p)),
-        Family::Planarity => stats(&[&topology.structural], |p| {
-            planarity::violation(x, normal, p)
-        }),
-        Family::Normality => stats(&[&topology.structural], |p| normality::violation(normal, p)),
-        Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
-    }
-}
-
 /// The largest strain (elongation `(|s| − L) / L`, 0 when compressed) of a
 /// weft or warp edge. Compression is left out: cloth buckles rather than
 /// compress, so a folded edge is not a stretched one.
@@ -220,41 +206,6 @@ pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
         e += 0.5 * m as f64 * v.length_squared() as f64;
     }
     e as f32
-}
-
-/// Per particle, the largest violation of `family` over the constraints
-/// that involve it (pairs: both ends; bend triples: all three), as in
-/// [`violation`]. For inspecting one particle.
-pub fn particle_violation(family: Family, state: &ClothState, topology: &Topology) -> Vec<f32> {
-    let x = &state.position;
-    let normal = |i| state.normal(i);
-    let mut out = vec![0.0f32; state.len()];
-    let mut put = |i: u32, v: f32| {
-        let slot = &mut out[i as usize];
-        *slot = slot.max(v);
-    };
-    match family {
-        Family::Curvature => {
-            for &t in &topology.bend.items {
-                let v = curvature::violation(x, t);
-                put(t.a, v);
-                put(t.mid, v);
-                put(t.b, v);
-            }
-        }
-        _ => {
-            for &p in &topology.structural.items {
-                let v = match family {
-                    Family::Stretch => stretch::violation(x, p),
-                    Family::Planarity => planarity::violation(x, normal, p),
-                    _ => normality::violation(normal, p),
-                };
-                put(p.a, v);
-                put(p.b, v);
-            }
-        }
-    }
-    out
 }
 
 /// Per particle, the largest strain of its weft and warp edges, as in

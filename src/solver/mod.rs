@@ -41,6 +41,7 @@ pub mod cloth;
 pub mod collision;
 pub mod constraints;
 pub mod diagnostics;
+pub mod family;
 pub mod forced_rotation;
 pub mod params;
 pub mod topology;
@@ -51,6 +52,7 @@ use std::time::Instant;
 pub use cloth::{ClothSpec, ClothState};
 pub use collision::{Collider, Pose, Shape};
 pub use diagnostics::{Diagnostics, Violation};
+pub use family::{Family, PerFamily, STRETCH_PASSES};
 pub use forced_rotation::ForcedRotation;
 pub use params::{
     ParamError, Params, REFERENCE_COMPLIANCE, Range, RangeError, Weights, Width, compliance_factor,
@@ -61,70 +63,10 @@ pub use update::Environment;
 use glam::Vec3;
 
 use collision::Contact;
-use constraints::{NoRecord, Particles, Recorder, stretch};
+use constraints::{NoRecord, Particles, stretch};
 use diagnostics::FamilyRecorder;
+use family::{Compliance, Multipliers, SWEEP, Sweep};
 use update::{FREE, Reference};
-
-/// The four constraint families of the adjust phase.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum Family {
-    /// Length limit on weft and warp edges, and the tethers.
-    Stretch,
-    /// Co-planarity of neighbours.
-    Planarity,
-    /// Co-normality of neighbours, and in-plane shear.
-    Normality,
-    /// Co-circularity of bend pairs.
-    Curvature,
-}
-
-impl Family {
-    /// All families, in the order the adjust phase projects them. The length
-    /// limit comes last, so it has the last word in every sweep: real cloth
-    /// hardly stretches, whatever the shape constraints ask.
-    pub const ALL: [Family; 4] = [
-        Family::Planarity,
-        Family::Normality,
-        Family::Curvature,
-        Family::Stretch,
-    ];
-
-    /// A stable index, `0..4`, for per-family arrays.
-    pub fn index(self) -> usize {
-        self as usize
-    }
-
-    /// Lower-case name, as used in presets and entity paths.
-    pub fn name(self) -> &'static str {
-        match self {
-            Family::Stretch => "stretch",
-            Family::Planarity => "planarity",
-            Family::Normality => "normality",
-            Family::Curvature => "curvature",
-        }
-    }
-}
-
-/// How many times one adjust sweep projects the length limit.
-///
-/// Stretch is the firm limit and the cheapest family (no angles, no turns),
-/// and the only rigid one at the default weights: a rigid constraint needs
-/// more Gauss–Seidel passes than a soft one, which XPBD settles in about one.
-/// Three passes per sweep bought a flag on a braking car from 0.20 to 0.085
-/// peak strain at 8 substeps × 2 iterations, for 7 % more time per sweep.
-pub const STRETCH_PASSES: usize = 3;
-
-/// The order of one adjust sweep: the surface families, then the length
-/// limit [`STRETCH_PASSES`] times, so it has the last word. (Running the
-/// stretch passes' colours in alternating orders, symmetric Gauss–Seidel,
-/// was measured and raised peak strain on every preset.)
-const SWEEP: [Family; 3 + STRETCH_PASSES] = {
-    let mut sweep = [Family::Stretch; 3 + STRETCH_PASSES];
-    sweep[0] = Family::Planarity;
-    sweep[1] = Family::Normality;
-    sweep[2] = Family::Curvature;
-    sweep
-};
 
 /// A particle that follows a body exactly.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -462,13 +404,13 @@ impl Solver {
 
     /// The current violation of one family.
     pub fn violation(&self, family: Family) -> Violation {
-        diagnostics::violation(family, &self.state, &self.topology)
+        family::violation(family, &self.state, &self.topology)
     }
 
     /// Per particle, the largest violation of `family` among the
     /// constraints that involve it.
     pub fn particle_violation(&self, family: Family) -> Vec<f32> {
-        diagnostics::particle_violation(family, &self.state, &self.topology)
+        family::particle_violation(family, &self.state, &self.topology)
     }
 
     /// Per particle, the largest strain of its weft and warp edges.
@@ -536,8 +478,7 @@ impl Solver {
         self.steps = step;
         if let Some(d) = self.diagnostics.as_deref_mut() {
             for f in Family::ALL {
-                d.families[f.index()].violation =
-                    diagnostics::violation(f, &self.state, &self.topology);
+                d.families[f].violation = family::violation(f, &self.state, &self.topology);
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
             d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);
@@ -591,7 +532,7 @@ impl Solver {
 
         for _ in 0..self.params.iterations {
             for family in SWEEP {
-                if self.params.weights.get(family) == 0.0 {
+                if self.params.weights[family] == 0.0 {
                     continue;
                 }
                 let p = Particles::new(
@@ -612,7 +553,7 @@ impl Solver {
                     None => sweep.project(family, mu, &mut NoRecord),
                     Some(d) => {
                         let t = Instant::now();
-                        let fd = &mut d.families[family.index()];
+                        let fd = &mut d.families[family];
                         if d.corrections {
                             let mut rec = FamilyRecorder::new(fd);
                             sweep.project(family, mu, &mut rec);
@@ -695,139 +636,3 @@ impl Solver {
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);
-
-/// Each family's compliance for one substep, `α̃ = α_ref · ((1 − λ)/λ)² / Δt²`
-/// (for a square cell; each constraint divides by its aspect).
-struct Compliance {
-    stretch: f32,
-    shear: f32,
-    planarity: f32,
-    normality: f32,
-    curvature: f32,
-}
-
-impl Compliance {
-    fn new(w: &Weights, dt: f32) -> Self {
-        let r = &REFERENCE_COMPLIANCE;
-        let of = |reference: f32, weight: f32| reference * compliance_factor(weight) / (dt * dt);
-        Self {
-            stretch: of(r.stretch, w.stretch),
-            shear: of(r.shear, w.normality),
-            planarity: of(r.planarity, w.planarity),
-            normality: of(r.normality, w.normality),
-            curvature: of(r.curvature, w.curvature),
-        }
-    }
-}
-
-/// The multipliers `μ` of every constraint over the current substep, in the
-/// same order as the constraints.
-#[derive(Clone, Debug, Default)]
-struct Multipliers {
-    structural: Vec<f32>,
-    tethers: Vec<f32>,
-    shear: Vec<f32>,
-    normality: Vec<f32>,
-    planarity: Vec<[f32; 2]>,
-    curvature: Vec<[f32; 2]>,
-}
-
-impl Multipliers {
-    /// All zero, sized for `topology` and `tethers` tethers: each substep
-    /// starts from no accumulated correction.
-    fn reset(&mut self, topology: &Topology, tethers: usize) {
-        let zero = |v: &mut Vec<f32>, n: usize| {
-            v.clear();
-            v.resize(n, 0.0);
-        };
-        let zero2 = |v: &mut Vec<[f32; 2]>, n: usize| {
-            v.clear();
-            v.resize(n, [0.0; 2]);
-        };
-        zero(&mut self.structural, topology.structural.len());
-        zero(&mut self.tethers, tethers);
-        zero(&mut self.shear, topology.shear.len());
-        zero(&mut self.normality, topology.structural.len());
-        zero2(&mut self.planarity, topology.structural.len());
-        zero2(&mut self.curvature, topology.bend.len());
-    }
-}
-
-/// What every family's projection in one sweep reads: the constraints, the
-/// state, the compliances and Eq. 3.
-struct Sweep<'a> {
-    topology: &'a Topology,
-    tethers: &'a stretch::Tethers,
-    p: &'a Particles<'a>,
-    k: &'a Compliance,
-    rot: &'a ForcedRotation,
-}
-
-impl Sweep<'_> {
-    /// Projects every constraint of one family once, colour batch by colour
-    /// batch, each with its multiplier in `mu`.
-    fn project<R: Recorder>(&self, family: Family, mu: &mut Multipliers, rec: &mut R) {
-        let Self {
-            topology,
-            tethers,
-            p,
-            k,
-            rot,
-        } = *self;
-        use constraints::{curvature, normality, planarity, project_batches};
-        let (structural, shear, bend) = (&topology.structural, &topology.shear, &topology.bend);
-        match family {
-            Family::Stretch => {
-                project_batches(
-                    &structural.items,
-                    &mut mu.structural,
-                    &structural.batches,
-                    rec,
-                    |c, m, r| stretch::project(p, c, m, k.stretch, r),
-                );
-                // Each particle appears once per tether batch.
-                project_batches(
-                    &tethers.items,
-                    &mut mu.tethers,
-                    &tethers.batches,
-                    rec,
-                    |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
-                );
-            }
-            Family::Planarity => {
-                project_batches(
-                    &structural.items,
-                    &mut mu.planarity,
-                    &structural.batches,
-                    rec,
-                    |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
-                );
-            }
-            Family::Normality => {
-                project_batches(
-                    &structural.items,
-                    &mut mu.normality,
-                    &structural.batches,
-                    rec,
-                    |c, m, r| normality::project(p, c, m, k.normality, rot, r),
-                );
-                project_batches(
-                    &shear.items,
-                    &mut mu.shear,
-                    &shear.batches,
-                    rec,
-                    |c, m, r| stretch::project(p, c, m, k.shear, r),
-                );
-            }
-            Family::Curvature => {
-                project_batches(
-                    &bend.items,
-                    &mut mu.curvature,
-                    &bend.batches,
-                    rec,
-                    |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
-                );
-            }
-        }
-    }
-}

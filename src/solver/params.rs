@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-use super::Family;
+use super::family::{Family, PerFamily};
 
 /// The per-family constraint weights `λ`, each in `[0, 1]`.
 ///
@@ -19,51 +19,12 @@ use super::Family;
 /// ([`REFERENCE_COMPLIANCE`]): `((1 − λ) / λ)²`, so `λ = ½` is the
 /// reference material and each step of 0.1 around it is about a factor of
 /// two in stiffness. See `docs/method.md` ("Weights").
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Weights {
-    /// Length limit on weft and warp edges (and the tethers).
-    pub stretch: f32,
-    /// Co-planarity of neighbours (each lies in the other's tangent plane).
-    pub planarity: f32,
-    /// Co-normality of neighbours (their normals agree) and, as the paper
-    /// pairs them, in-plane shear (the cell diagonals).
-    pub normality: f32,
-    /// Co-circularity of bend runs: smooth curvature.
-    pub curvature: f32,
-}
+/// The defaults are [`PerFamily::default_weights`].
+pub type Weights = PerFamily<f32>;
 
-impl Default for Weights {
-    fn default() -> Self {
-        Self {
-            stretch: 1.0,
-            planarity: 0.5,
-            normality: 0.2,
-            curvature: 0.1,
-        }
-    }
-}
-
-impl Weights {
-    /// The weight of one family.
-    pub fn get(&self, family: Family) -> f32 {
-        match family {
-            Family::Stretch => self.stretch,
-            Family::Planarity => self.planarity,
-            Family::Normality => self.normality,
-            Family::Curvature => self.curvature,
-        }
-    }
-
-    /// Mutable access to the weight of one family (for sliders).
-    pub fn get_mut(&mut self, family: Family) -> &mut f32 {
-        match family {
-            Family::Stretch => &mut self.stretch,
-            Family::Planarity => &mut self.planarity,
-            Family::Normality => &mut self.normality,
-            Family::Curvature => &mut self.curvature,
-        }
-    }
+/// Reads `[solver.weights]` over the default weights.
+fn weights_over_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Weights, D::Error> {
+    Weights::deserialize_over(Weights::default_weights(), d)
 }
 
 /// The reference compliances `α_ref` (at `λ = ½`) of the constraint kinds,
@@ -167,6 +128,7 @@ pub struct Params {
     /// substep. Uniform motion is never damped (see [`update`](super::update)).
     pub damping: f32,
     /// Constraint weights `λ` per family.
+    #[serde(deserialize_with = "weights_over_defaults")]
     pub weights: Weights,
     /// Cap `Φ ∈ [0, π]` on one forced rotation, in radians (Eq. 3).
     pub phi: f32,
@@ -184,7 +146,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             damping: 0.99,
-            weights: Weights::default(),
+            weights: Weights::default_weights(),
             phi: std::f32::consts::FRAC_PI_4,
             h: Width::Auto,
             iterations: 4,
@@ -391,7 +353,7 @@ impl Params {
             .check("damping", self.damping)?;
         for f in Family::ALL {
             let weight = Range::new(0.0, 1.0).of("λ");
-            weight.check(format!("weights.{}", f.name()), self.weights.get(f))?;
+            weight.check(format!("weights.{}", f.name()), self.weights[f])?;
         }
         let phi = Range::new(0.0, std::f32::consts::PI).of("Φ").unit(" rad");
         phi.check("phi", self.phi)?;

@@ -71,7 +71,7 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
                 .map(|i| {
                     let total: f32 = match by.family() {
                         Some(f) => d.family(f).dx[i].length(),
-                        None => d.families.iter().map(|f| f.dx[i].length()).sum(),
+                        None => d.families.iter().map(|(_, f)| f.dx[i].length()).sum(),
                     };
                     ramp(total / 1e-3)
                 })

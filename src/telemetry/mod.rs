@@ -436,7 +436,7 @@ impl Telemetry {
         );
         for f in Family::ALL {
             values = values.with_component::<rerun::components::Scalar>(
-                VIOLATION_NAMES[f.index()],
+                particle_component("violation", f),
                 scalars(solver.particle_violation(f)),
             );
         }
@@ -445,9 +445,12 @@ impl Telemetry {
                 let fd = d.family(f);
                 let len = |v: &[Vec3]| v.iter().map(|v| v.length() as f64).collect::<Vec<_>>();
                 values = values
-                    .with_component::<rerun::components::Scalar>(DX_NAMES[f.index()], len(&fd.dx))
                     .with_component::<rerun::components::Scalar>(
-                        DTHETA_NAMES[f.index()],
+                        particle_component("dx", f),
+                        len(&fd.dx),
+                    )
+                    .with_component::<rerun::components::Scalar>(
+                        particle_component("dtheta", f),
                         len(&fd.dtheta),
                     );
             }
@@ -459,7 +462,7 @@ impl Telemetry {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
-            let shown = self.settings.corrections.get(f);
+            let shown = self.settings.corrections[f];
             for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
                 // A family switched off logs empty arrows, clearing its old ones.
                 let (origins, arrows): (Vec<Vec3>, Vec<Vec3>) = vectors
@@ -485,20 +488,11 @@ impl Telemetry {
     }
 }
 
-/// The per-particle components on the particles entity, per family.
-const VIOLATION_NAMES: [&str; 4] = [
-    "violation_stretch",
-    "violation_planarity",
-    "violation_normality",
-    "violation_curvature",
-];
-const DX_NAMES: [&str; 4] = ["dx_stretch", "dx_planarity", "dx_normality", "dx_curvature"];
-const DTHETA_NAMES: [&str; 4] = [
-    "dtheta_stretch",
-    "dtheta_planarity",
-    "dtheta_normality",
-    "dtheta_curvature",
-];
+/// A per-family component on the particles entity: `violation_stretch`,
+/// `dx_curvature`, …
+fn particle_component(kind: &str, f: Family) -> rerun::ComponentIdentifier {
+    rerun::ComponentIdentifier::try_new(format!("{kind}_{}", f.name())).expect("not empty")
+}
 
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3

@@ -3,36 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Per-family bounds.
-#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FamilyBounds {
-    /// Bound on the stretch violation (strain).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stretch: Option<f32>,
-    /// Bound on the planarity violation.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub planarity: Option<f32>,
-    /// Bound on the normality violation (radians).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub normality: Option<f32>,
-    /// Bound on the curvature violation.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub curvature: Option<f32>,
-}
-
-impl FamilyBounds {
-    /// The bound of one family.
-    pub fn get(&self, f: crate::solver::Family) -> Option<f32> {
-        use crate::solver::Family::*;
-        match f {
-            Stretch => self.stretch,
-            Planarity => self.planarity,
-            Normality => self.normality,
-            Curvature => self.curvature,
-        }
-    }
-}
+/// Per-family bounds (none unless given).
+pub type FamilyBounds = crate::solver::PerFamily<Option<f32>>;
 
 /// What a recording must satisfy; `weft record` exits non-zero otherwise.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -103,6 +103,7 @@ pub struct TelemetrySettings {
     /// What particles are coloured by.
     pub color_by: ColorBy,
     /// Which families' correction arrows are logged (at level `full`).
+    #[serde(deserialize_with = "toggles_over_all_on")]
     pub corrections: FamilyToggles,
 }
 
@@ -114,56 +115,15 @@ impl Default for TelemetrySettings {
             arrow_threshold: 1e-5,
             arrow_scale: 20.0,
             color_by: ColorBy::Strain,
-            corrections: FamilyToggles::default(),
+            corrections: FamilyToggles::splat(true),
         }
     }
 }
 
-/// One switch per constraint family.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FamilyToggles {
-    /// Stretch.
-    pub stretch: bool,
-    /// Planarity.
-    pub planarity: bool,
-    /// Normality.
-    pub normality: bool,
-    /// Curvature.
-    pub curvature: bool,
-}
+/// One switch per constraint family (all on unless given).
+pub type FamilyToggles = crate::solver::PerFamily<bool>;
 
-impl Default for FamilyToggles {
-    fn default() -> Self {
-        Self {
-            stretch: true,
-            planarity: true,
-            normality: true,
-            curvature: true,
-        }
-    }
-}
-
-impl FamilyToggles {
-    /// The switch of one family.
-    pub fn get(&self, f: crate::solver::Family) -> bool {
-        use crate::solver::Family::*;
-        match f {
-            Stretch => self.stretch,
-            Planarity => self.planarity,
-            Normality => self.normality,
-            Curvature => self.curvature,
-        }
-    }
-
-    /// The switch of one family, mutably.
-    pub fn get_mut(&mut self, f: crate::solver::Family) -> &mut bool {
-        use crate::solver::Family::*;
-        match f {
-            Stretch => &mut self.stretch,
-            Planarity => &mut self.planarity,
-            Normality => &mut self.normality,
-            Curvature => &mut self.curvature,
-        }
-    }
+/// Reads `telemetry.corrections` over all families on.
+fn toggles_over_all_on<'de, D: serde::Deserializer<'de>>(d: D) -> Result<FamilyToggles, D::Error> {
+    FamilyToggles::deserialize_over(FamilyToggles::splat(true), d)
 }

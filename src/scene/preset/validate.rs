@@ -99,7 +99,7 @@ impl Preset {
             bound("expect.settle_energy", e.settle_energy)?;
             for f in Family::ALL {
                 let key = format!("expect.max_violation.{}", f.name());
-                bound(&key, e.max_violation.get(f))?;
+                bound(&key, e.max_violation[f])?;
             }
         }
         Ok(())
