@@ -18,10 +18,10 @@ use super::preset_diff;
 use super::session::{BranchAt, Command, Session, Status};
 use crate::scene::{
     Override, Tuning, load,
-    preset::{ColorBy, Level, Preset, TelemetrySettings},
+    preset::{ColorBy, Level, Preset, TelemetrySettings, WindSection},
     shipped,
 };
-use crate::solver::{Family, Width};
+use crate::solver::{Family, Params, Width};
 
 /// The simulation's keyboard shortcuts: key, what it does.
 pub const SHORTCUTS: [(Key, &str); 4] = [
@@ -399,8 +399,8 @@ impl Panel {
             .show(ui, |ui| {
                 for c in &status.checks {
                     ui.label(c.bound.trim_start_matches("expect."));
-                    ui.monospace(format!("{:.3e}", c.value));
-                    ui.monospace(format!("≤ {:.3e}", c.limit));
+                    ui.monospace(figure(c.value));
+                    ui.monospace(format!("≤ {}", figure(c.limit)));
                     if c.ok {
                         ui.colored_label(Color32::from_rgb(110, 190, 110), "ok");
                     } else {
@@ -477,35 +477,45 @@ impl Panel {
     fn solver_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
         ui.label(RichText::new("Solver").strong());
         let before = self.tuning;
-        let p = &mut self.tuning.solver;
+        // Every field, by name: a new parameter without a control here does
+        // not compile.
+        let Params {
+            damping,
+            weights,
+            phi,
+            h,
+            iterations,
+            dt,
+            substeps,
+        } = &mut self.tuning.solver;
         let free = SliderClamping::Never;
         ui.add(
-            Slider::new(&mut p.damping, 0.0..=1.0)
+            Slider::new(damping, 0.0..=1.0)
                 .clamping(free)
                 .text("k damping"),
         );
         for f in Family::BY_INDEX {
             ui.add(
-                Slider::new(&mut p.weights[f], 0.0..=1.0)
+                Slider::new(&mut weights[f], 0.0..=1.0)
                     .clamping(free)
                     .text(format!("λ {}", f.name())),
             );
         }
         ui.add(
-            Slider::new(&mut p.phi, 0.0..=std::f32::consts::PI)
+            Slider::new(phi, 0.0..=std::f32::consts::PI)
                 .clamping(free)
                 .text("Φ cap (rad)"),
         );
         ui.horizontal(|ui| {
-            let mut auto = p.h == Width::Auto;
+            let mut auto = *h == Width::Auto;
             if ui.checkbox(&mut auto, "h auto").changed() {
-                p.h = if auto {
+                *h = if auto {
                     Width::Auto
                 } else {
                     Width::Fixed(0.001)
                 };
             }
-            if let Width::Fixed(h) = &mut p.h {
+            if let Width::Fixed(h) = h {
                 ui.add(
                     Slider::new(h, 0.0..=0.1)
                         .logarithmic(true)
@@ -515,17 +525,13 @@ impl Panel {
             }
         });
         ui.add(
-            Slider::new(&mut p.iterations, 1..=50)
+            Slider::new(iterations, 1..=50)
                 .clamping(free)
                 .text("iterations"),
         );
+        ui.add(Slider::new(dt, 0.001..=0.05).clamping(free).text("Δt (s)"));
         ui.add(
-            Slider::new(&mut p.dt, 0.001..=0.05)
-                .clamping(free)
-                .text("Δt (s)"),
-        );
-        ui.add(
-            Slider::new(&mut p.substeps, 1..=32)
+            Slider::new(substeps, 1..=32)
                 .clamping(free)
                 .text("substeps"),
         );
@@ -535,63 +541,73 @@ impl Panel {
     fn wind_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
         ui.label(RichText::new("Wind").strong());
         let before = self.tuning;
-        let w = &mut self.tuning.wind;
+        let WindSection {
+            velocity,
+            gust,
+            gust_period,
+            sway,
+        } = &mut self.tuning.wind;
         ui.horizontal(|ui| {
             ui.label("velocity");
-            ui.add(
-                egui::DragValue::new(&mut w.velocity.x)
-                    .speed(0.1)
-                    .prefix("x "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut w.velocity.y)
-                    .speed(0.1)
-                    .prefix("y "),
-            );
-            ui.add(
-                egui::DragValue::new(&mut w.velocity.z)
-                    .speed(0.1)
-                    .prefix("z "),
-            );
+            for (v, axis) in [
+                (&mut velocity.x, "x "),
+                (&mut velocity.y, "y "),
+                (&mut velocity.z, "z "),
+            ] {
+                ui.add(egui::DragValue::new(v).speed(0.1).prefix(axis));
+            }
         });
-        ui.add(Slider::new(&mut w.gust, 0.0..=20.0).text("gust (m/s)"));
-        ui.add(Slider::new(&mut w.gust_period, 0.0..=10.0).text("gust period (s)"));
-        ui.add(Slider::new(&mut w.sway, 0.0..=90.0).text("sway (°)"));
+        ui.add(Slider::new(gust, 0.0..=20.0).text("gust (m/s)"));
+        ui.add(Slider::new(gust_period, 0.0..=10.0).text("gust period (s)"));
+        ui.add(Slider::new(sway, 0.0..=90.0).text("sway (°)"));
         self.commit(session, before);
     }
 
     fn telemetry_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
         ui.label(RichText::new("Telemetry").strong());
         let before = self.telemetry;
-        let t = &mut self.telemetry;
+        let TelemetrySettings {
+            level,
+            log_every,
+            arrow_threshold,
+            arrow_scale,
+            color_by,
+            corrections,
+        } = &mut self.telemetry;
         egui::ComboBox::from_label("level")
-            .selected_text(format!("{:?}", t.level).to_lowercase())
+            .selected_text(format!("{level:?}").to_lowercase())
             .show_ui(ui, |ui| {
                 for l in [Level::Off, Level::Summary, Level::Full] {
-                    ui.selectable_value(&mut t.level, l, format!("{l:?}").to_lowercase());
+                    ui.selectable_value(level, l, format!("{l:?}").to_lowercase());
                 }
             });
         egui::ComboBox::from_label("colour by")
-            .selected_text(t.color_by.name())
+            .selected_text(color_by.name())
             .show_ui(ui, |ui| {
                 for c in ColorBy::ALL {
-                    ui.selectable_value(&mut t.color_by, c, c.name());
+                    ui.selectable_value(color_by, c, c.name());
                 }
             });
+        ui.add(
+            egui::DragValue::new(log_every)
+                .range(1..=1000)
+                .prefix("log every ")
+                .suffix(" frames"),
+        );
         ui.horizontal_wrapped(|ui| {
             ui.label("corrections:");
             for f in Family::BY_INDEX {
-                ui.checkbox(&mut t.corrections[f], f.name());
+                ui.checkbox(&mut corrections[f], f.name());
             }
         });
         ui.add(
-            Slider::new(&mut t.arrow_scale, 0.1..=500.0)
+            Slider::new(arrow_scale, 0.1..=500.0)
                 .logarithmic(true)
                 .text("arrow scale"),
         );
-        ui.add(Slider::new(&mut t.arrow_threshold, 0.0..=0.01).text("arrow threshold"));
-        if *t != before {
-            session.send(Command::Telemetry(*t));
+        ui.add(Slider::new(arrow_threshold, 0.0..=0.01).text("arrow threshold"));
+        if self.telemetry != before {
+            session.send(Command::Telemetry(self.telemetry));
         }
     }
 
@@ -696,5 +712,15 @@ impl Panel {
             ),
             Err(e) => self.say(false, format!("saved {path}, but it does not load: {e}")),
         }
+    }
+}
+
+/// A figure as a person reads it: four decimals in the usual range,
+/// scientific notation only for the very small or large.
+fn figure(v: f64) -> String {
+    if v == 0.0 || (1e-3..1e4).contains(&v.abs()) {
+        format!("{v:.4}")
+    } else {
+        format!("{v:.3e}")
     }
 }
