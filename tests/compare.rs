@@ -4,7 +4,7 @@
 //! blueprint), the `--fail-if` gate and its exit codes, and bad input.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use weft::compare::gate::{Bound, Limit, check};
 use weft::compare::{RunData, read_all, state_diff};
@@ -13,9 +13,8 @@ use weft::scene::{Override, Scene, load};
 use weft::solver::Family;
 use weft::telemetry::{Telemetry, read};
 
-fn weft() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-}
+mod common;
+use common::weft;
 
 fn compare(args: &[&str], files: &[&Path]) -> Output {
     weft()

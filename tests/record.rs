@@ -3,7 +3,6 @@
 //! bit-for-bit replay.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::atomic::AtomicBool;
 
 use weft::record::{Figures, Run};
@@ -11,9 +10,8 @@ use weft::scene::{Override, Scene, load, shipped};
 use weft::solver::Family;
 use weft::telemetry::{Telemetry, paths, read};
 
-fn weft() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-}
+mod common;
+use common::weft;
 
 fn sets(s: &[&str]) -> Vec<Override> {
     s.iter().map(|s| s.parse().unwrap()).collect()
@@ -261,18 +259,9 @@ fn ctrl_c_closes_the_file_with_every_frame_logged() {
         .spawn()
         .unwrap();
     // Wait until frames are being written, then interrupt.
-    let start = std::time::Instant::now();
-    while std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0) < 200_000 {
-        assert!(start.elapsed().as_secs() < 120, "the recording never grew");
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    }
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130));
+    let grown = || std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0) >= 200_000;
+    let code = common::interrupt_when(&mut child, "the recording never grew", grown);
+    assert_eq!(code, Some(130));
 
     let rec = read::read(&path).unwrap();
     let summary: toml::Table = rec

@@ -6,15 +6,14 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use weft::sweep::grid::{self, Axis};
 use weft::sweep::shard::{self, Shard};
 use weft::sweep::{PointResult, collect};
 
-fn weft() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_weft"))
-}
+mod common;
+use common::weft;
 
 fn run(args: &[&str]) -> Output {
     weft().args(args).output().unwrap()
@@ -595,18 +594,9 @@ fn ctrl_c_finishes_the_running_point_and_the_same_command_resumes() {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    let start = std::time::Instant::now();
-    while !out.join("0_iterations=1.json").exists() {
-        assert!(start.elapsed().as_secs() < 120, "no point finished");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130));
+    let finished = || out.join("0_iterations=1.json").exists();
+    let code = common::interrupt_when(&mut child, "no point finished", finished);
+    assert_eq!(code, Some(130));
     let done = collect::read(&out).unwrap();
     assert!(
         !done.points.is_empty() && !done.missing.is_empty(),
