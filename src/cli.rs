@@ -4,8 +4,6 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
@@ -278,15 +276,7 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
 
     // The first Ctrl-C stops after the current frame and closes the file
     // cleanly; a second one quits at once.
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    if let Err(e) = ctrlc::set_handler(move || {
-        if flag.swap(true, Ordering::Relaxed) {
-            std::process::exit(130);
-        }
-    }) {
-        eprintln!("warning: Ctrl-C will end the run without closing the file cleanly ({e})");
-    }
+    let stop = crate::interrupt::stop_flag(None);
 
     let bar = indicatif::ProgressBar::new(frames).with_style(
         indicatif::ProgressStyle::with_template(

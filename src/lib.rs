@@ -8,6 +8,7 @@
 //!   bit-for-bit reproduction.
 //! - [`compare`], [`sweep`]: recorded runs side by side, and grids of runs
 //!   (also sharded over a batch engine's array jobs).
+//! - [`interrupt`]: Ctrl-C for long headless jobs (a clean stop, then a quit).
 //! - [`cli`]: the `weft` command line.
 //! - `app` (feature `viewer`, on by default): the desktop debugger, the Rerun
 //!   viewer embedded beside an egui tuning panel.
@@ -18,6 +19,7 @@
 pub mod app;
 pub mod cli;
 pub mod compare;
+pub mod interrupt;
 pub mod record;
 pub mod replay;
 pub mod scene;

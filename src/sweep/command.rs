@@ -2,8 +2,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+
+use std::sync::atomic::Ordering;
 
 use anyhow::bail;
 use clap::Args;
@@ -132,14 +132,9 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
         );
     }
 
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    let _ = ctrlc::set_handler(move || {
-        if flag.swap(true, Ordering::Relaxed) {
-            std::process::exit(130);
-        }
-        eprintln!("stopping after the points running now (Ctrl-C again to quit at once)");
-    });
+    let stop = crate::interrupt::stop_flag(Some(
+        "stopping after the points running now (Ctrl-C again to quit at once)",
+    ));
 
     let bar = indicatif::ProgressBar::new(0).with_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} points, eta {eta}")

@@ -1,0 +1,235 @@
+//! A live session: the simulation on its own thread, driven by commands from
+//! the panel, reporting a [`Status`] back.
+//!
+//! Every run of a session (the first, and each Reset, Load, Record or
+//! Branch) is its own Rerun recording, with a new recording id, a name a
+//! person can read (`#2 flag_on_car · curvature 0.1→0.35 · branch of #1 at
+//! frame 180`) and recording properties (`weft`: version, preset, run,
+//! changes, parent and frame of a branch; `result`, when the run ends: frames,
+//! final-state digest, verdict). Earlier runs stay in the viewer's recording
+//! list. The thread owns the current [`Run`] (scene + telemetry) and its
+//! [`History`] (checkpoints, to branch from any frame). Telemetry goes
+//! through a [`Tee`]: always to the viewer (or wherever the caller forwards
+//! it), and to an `.rrd` file when the run is being recorded, so the file
+//! gets exactly one run, from its first message. A change of parameters
+//! applies at the next step and is logged at the frame it takes effect.
+
+mod runs;
+mod worker;
+
+use std::path::PathBuf;
+use std::sync::mpsc::{Sender, channel};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rerun::log::LogMsg;
+
+use crate::record::Check;
+use crate::scene::{Loaded, Tuning, preset::TelemetrySettings};
+use crate::solver::PerFamily;
+
+pub use runs::Series;
+use worker::Worker;
+
+/// What the panel asks of the session.
+#[derive(Clone, Debug)]
+pub enum Command {
+    /// Run in real time (times the speed).
+    Play,
+    /// Stop stepping.
+    Pause,
+    /// Step one frame (pauses).
+    Step,
+    /// Start the scene over from its preset, keeping the tuning (a new run).
+    Reset,
+    /// Simulated seconds per wall-clock second.
+    Speed(f32),
+    /// New solver parameters and wind, from the next step.
+    Tune(Tuning),
+    /// New telemetry settings.
+    Telemetry(TelemetrySettings),
+    /// Load another preset (validated by the caller) and start over.
+    Load(Box<Loaded>, String),
+    /// Start recording to an `.rrd` file (a new run).
+    StartRecording(PathBuf),
+    /// Stop recording and close the file.
+    StopRecording,
+    /// Start a new run from a frame of the current one, with the current
+    /// tuning from the next step on (pauses).
+    Branch(BranchAt),
+    /// Which particle the inspector follows.
+    Inspect(Option<usize>),
+}
+
+/// Where a branch starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BranchAt {
+    /// At this frame.
+    Frame(u64),
+    /// At the frame shown at this simulated time (the viewer's time cursor).
+    Time(f64),
+}
+
+/// One run of the session: one Rerun recording.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunInfo {
+    /// 1 for the session's first run, then 2, 3…
+    pub number: u32,
+    /// The Rerun recording id.
+    pub recording_id: String,
+    /// The recording's name.
+    pub name: String,
+    /// For a branch: the parent's number and recording id, and the frame.
+    pub parent: Option<(u32, String, u64)>,
+}
+
+/// What the inspector shows of one particle, after the last step.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ParticleReadout {
+    /// Index in the cloth.
+    pub index: usize,
+    /// Grid cell: `i` along the weft, `j` along the warp.
+    pub cell: (u32, u32),
+    /// Largest strain of its weft and warp edges.
+    pub strain: f32,
+    /// Per family, the largest violation of the constraints that involve it.
+    pub violation: PerFamily<f32>,
+    /// Per family, the translation applied to it in the last adjust.
+    pub dx: PerFamily<Vec3>,
+    /// Per family, the rotation applied to it (axis × angle, radians).
+    pub dtheta: PerFamily<Vec3>,
+}
+
+/// What the session reports to the panel.
+#[derive(Clone, Debug, Default)]
+pub struct Status {
+    /// The preset's name or path.
+    pub preset_name: String,
+    /// The loaded preset, with the current tuning applied.
+    pub preset: Option<crate::scene::Preset>,
+    /// The current run.
+    pub run: RunInfo,
+    /// Every run of the session, oldest first.
+    pub runs: Vec<RunInfo>,
+    /// The current frame.
+    pub frame: u64,
+    /// Simulated seconds.
+    pub time: f64,
+    /// Whether it is playing.
+    pub playing: bool,
+    /// Simulation speed.
+    pub speed: f32,
+    /// Frames per wall-clock second, recently.
+    pub steps_per_second: f32,
+    /// Wall time of the last step, in milliseconds.
+    pub step_ms: f32,
+    /// Violation after the last step, per family.
+    pub max_violation: PerFamily<f32>,
+    /// Largest edge strain after the last step.
+    pub max_strain: f32,
+    /// Digest of the current state (see `ClothState::digest`), in hex.
+    pub digest: String,
+    /// The preset's `[expect]` bounds against the run's values so far.
+    pub checks: Vec<Check>,
+    /// Checkpoints kept for branching, and frames between them.
+    pub checkpoints: (usize, u64),
+    /// The inspected particle.
+    pub particle: Option<ParticleReadout>,
+    /// The recording file, while recording.
+    pub recording: Option<PathBuf>,
+    /// The last error (a solver failure or a file problem).
+    pub error: Option<String>,
+}
+
+/// The handle the panel holds.
+pub struct Session {
+    tx: Sender<Command>,
+    status: Arc<Mutex<Status>>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Session {
+    /// Starts a paused session of `loaded`, its telemetry forwarded to `forward`.
+    pub fn start(
+        loaded: Loaded,
+        name: String,
+        forward: impl Fn(&LogMsg) + Send + Sync + 'static,
+    ) -> Result<Self, String> {
+        let status = Arc::new(Mutex::new(Status {
+            preset_name: name.clone(),
+            preset: Some(loaded.preset.clone()),
+            speed: 1.0,
+            ..Status::default()
+        }));
+        let worker = Worker::new(loaded, name, Arc::new(forward), status.clone())?;
+        let (tx, rx) = channel();
+        let thread = std::thread::Builder::new()
+            .name("weft-sim".into())
+            .spawn(move || worker.serve(rx))
+            .map_err(|e| e.to_string())?;
+        Ok(Self {
+            tx,
+            status,
+            thread: Some(thread),
+        })
+    }
+
+    /// Sends a command; it is handled before the next step.
+    /// If the simulation thread has ended (it only does on a bug), the
+    /// status says so.
+    pub fn send(&self, c: Command) {
+        if self.tx.send(c).is_err() {
+            self.status.lock().expect("not poisoned").error =
+                Some("the simulation thread has stopped; restart weft".into());
+        }
+    }
+
+    /// The latest status.
+    pub fn status(&self) -> Status {
+        self.status.lock().expect("not poisoned").clone()
+    }
+
+    /// Waits (up to `timeout`) until `done` holds for the status.
+    pub fn wait_for(&self, timeout: Duration, done: impl Fn(&Status) -> bool) -> bool {
+        let start = Instant::now();
+        while start.elapsed() < timeout {
+            if done(&self.status()) {
+                return true;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        done(&self.status())
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        // Closing the channel ends the worker, which closes any recording.
+        let (tx, _) = channel();
+        drop(std::mem::replace(&mut self.tx, tx));
+        if let Some(t) = self.thread.take()
+            && t.join().is_err()
+        {
+            eprintln!("error: the simulation thread panicked");
+        }
+    }
+}
+
+/// `ok`, or `FAIL: expect.max_strain, …` (empty without bounds).
+pub fn verdict_text(checks: &[Check]) -> String {
+    if checks.is_empty() {
+        return "no [expect] bounds".into();
+    }
+    let failed: Vec<&str> = checks
+        .iter()
+        .filter(|c| !c.ok)
+        .map(|c| c.bound.as_str())
+        .collect();
+    if failed.is_empty() {
+        "ok".into()
+    } else {
+        format!("FAIL: {}", failed.join(", "))
+    }
+}

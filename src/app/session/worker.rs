@@ -1,0 +1,464 @@
+//! The simulation thread's state and loop: commands in, steps at real-time
+//! pace, status out.
+
+use std::sync::mpsc::Receiver;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use rerun::sink::FileSink;
+
+use crate::app::history::History;
+use crate::record::{Check, Run, verdict};
+use crate::scene::{Loaded, Scene, load};
+use crate::solver::{Family, PerFamily};
+
+use super::runs::{Forward, Start, Tee, open};
+use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
+
+/// What the simulation thread owns: the current run and its history, every
+/// run of the session, the stream of the current one, and the pacing.
+pub(super) struct Worker {
+    run: Run,
+    history: History,
+    series: Series,
+    info: RunInfo,
+    runs: Vec<RunInfo>,
+    loaded: Loaded,
+    name: String,
+    rec: rerun::RecordingStream,
+    tee: Arc<Tee>,
+    forward: Forward,
+    inspect: Option<usize>,
+    status: Arc<Mutex<Status>>,
+    playing: bool,
+    speed: f32,
+    next_step: Instant,
+    recent: std::collections::VecDeque<Instant>,
+}
+
+impl Worker {
+    pub(super) fn new(
+        loaded: Loaded,
+        name: String,
+        forward: Forward,
+        status: Arc<Mutex<Status>>,
+    ) -> Result<Self, String> {
+        let base = load::load(&name, &[]).ok().map(|l| l.preset);
+        let opened = open(
+            &forward,
+            Start::Fresh(Box::new(loaded.clone())),
+            &name,
+            RunInfo {
+                number: 1,
+                ..RunInfo::default()
+            },
+            loaded.preset.telemetry,
+            base,
+            None,
+        )?;
+        let worker = Self {
+            run: opened.run,
+            history: opened.history,
+            series: Series::new(),
+            runs: vec![opened.info.clone()],
+            info: opened.info,
+            loaded,
+            name,
+            rec: opened.rec,
+            tee: opened.tee,
+            forward,
+            inspect: None,
+            status,
+            playing: false,
+            speed: 1.0,
+            next_step: Instant::now(),
+            recent: Default::default(),
+        };
+        worker.publish();
+        Ok(worker)
+    }
+
+    pub(super) fn serve(mut self, rx: Receiver<Command>) {
+        loop {
+            // Paused, wait for a command; playing, take what has arrived.
+            let first = if self.playing {
+                match rx.try_recv() {
+                    Ok(c) => Some(c),
+                    Err(std::sync::mpsc::TryRecvError::Empty) => None,
+                    Err(std::sync::mpsc::TryRecvError::Disconnected) => break,
+                }
+            } else {
+                match rx.recv_timeout(Duration::from_millis(50)) {
+                    Ok(c) => Some(c),
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => None,
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+                }
+            };
+            let mut pending: Vec<Command> = first.into_iter().collect();
+            pending.extend(rx.try_iter());
+            for c in pending {
+                self.handle(c);
+            }
+            if self.playing {
+                let now = Instant::now();
+                if now >= self.next_step {
+                    self.step();
+                    let dt =
+                        self.run.scene.solver().params().dt as f64 / self.speed.max(1e-3) as f64;
+                    self.next_step += Duration::from_secs_f64(dt);
+                    // Too far behind (a big cloth): do not try to catch up.
+                    if Instant::now() > self.next_step + Duration::from_millis(250) {
+                        self.next_step = Instant::now();
+                    }
+                } else {
+                    std::thread::sleep((self.next_step - now).min(Duration::from_millis(5)));
+                }
+            }
+        }
+        self.finish();
+        self.stop_recording();
+    }
+
+    fn handle(&mut self, c: Command) {
+        match c {
+            Command::Play => {
+                self.playing = true;
+                self.next_step = Instant::now();
+            }
+            Command::Pause => self.playing = false,
+            Command::Step => {
+                self.playing = false;
+                self.step();
+            }
+            Command::Reset => {
+                let loaded = self.current_loaded();
+                self.begin(Start::Fresh(Box::new(loaded)), None);
+            }
+            Command::Speed(s) => self.speed = s.clamp(0.01, 100.0),
+            Command::Tune(t) => {
+                if let Err(e) = self.run.set_tuning(&t) {
+                    self.set_error(Some(e.to_string()));
+                }
+            }
+            Command::Telemetry(t) => {
+                let (frame, time) = (self.run.scene.frame(), self.run.scene.time());
+                let text = format!(
+                    "telemetry settings: {}",
+                    crate::scene::load::to_toml(&t).replace('\n', " ")
+                );
+                if let Err(e) = self.run.telemetry.log_event(frame, time, &text) {
+                    self.set_error(Some(e.to_string()));
+                }
+                self.run.telemetry.set_settings(t);
+            }
+            Command::Load(loaded, name) => {
+                self.name = name;
+                self.loaded = *loaded.clone();
+                self.begin(Start::Fresh(loaded), None);
+            }
+            Command::StartRecording(path) => {
+                // A recording is a new run from frame 0 with the current
+                // tuning (stored in its preset), so `weft replay`
+                // reproduces it.
+                match FileSink::new(&path) {
+                    Ok(file) => {
+                        let loaded = self.current_loaded();
+                        self.loaded = loaded.clone();
+                        if self.begin(Start::Fresh(Box::new(loaded)), Some(file)) {
+                            self.status.lock().expect("not poisoned").recording = Some(path);
+                        }
+                    }
+                    Err(e) => {
+                        self.set_error(Some(format!("cannot record to {}: {e}", path.display())))
+                    }
+                }
+            }
+            Command::StopRecording => {
+                self.finish();
+                self.stop_recording();
+            }
+            Command::Branch(at) => self.branch(at),
+            Command::Inspect(p) => {
+                let n = self.run.scene.solver().state().len();
+                self.inspect = p.filter(|&i| i < n);
+            }
+        }
+        self.publish();
+    }
+
+    /// The loaded preset with the current tuning and telemetry settings.
+    fn current_loaded(&self) -> Loaded {
+        let tuning = self.run.scene.tuning();
+        let mut loaded = self.loaded.clone();
+        tuning.apply_to(&mut loaded.preset);
+        loaded.preset.telemetry = *self.run.telemetry.settings();
+        loaded.resolved = load::to_toml(&loaded.preset);
+        loaded
+    }
+
+    fn branch(&mut self, at: BranchAt) {
+        let last = self.history.last_frame();
+        let frame = match at {
+            BranchAt::Frame(f) => f,
+            BranchAt::Time(t) => self.history.frame_at(t),
+        };
+        if frame > last {
+            return self.set_error(Some(format!(
+                "cannot branch at frame {frame}: run #{} has reached frame {last}",
+                self.info.number
+            )));
+        }
+        let tuning = self.run.scene.tuning();
+        match self.history.state_at(frame) {
+            Ok(snapshot) => {
+                let history = self.history.branch(frame, tuning);
+                let parent_series = self.series.clone();
+                self.playing = false;
+                if self.begin(
+                    Start::Branch {
+                        snapshot: Box::new(snapshot),
+                        history: Box::new(history),
+                        tuning,
+                        parent_series,
+                    },
+                    None,
+                ) {
+                    // The two runs are the same up to the branch frame.
+                    self.series.retain(|(f, _, _)| *f <= frame);
+                }
+            }
+            Err(e) => self.set_error(Some(format!("cannot branch at frame {frame}: {e}"))),
+        }
+    }
+
+    /// Ends the current run and starts a new one; false if it could not.
+    fn begin(&mut self, start: Start, file: Option<FileSink>) -> bool {
+        let number = self.runs.len() as u32 + 1;
+        let parent = match &start {
+            Start::Branch { snapshot, .. } => Some((
+                self.info.number,
+                self.info.recording_id.clone(),
+                snapshot.scene.frame(),
+            )),
+            Start::Fresh(_) => None,
+        };
+        let info = RunInfo {
+            number,
+            parent,
+            ..RunInfo::default()
+        };
+        let settings = *self.run.telemetry.settings();
+        // The base a run's name is described against: the preset as named.
+        let base = load::load(&self.name, &[]).ok().map(|l| l.preset);
+        match open(&self.forward, start, &self.name, info, settings, base, file) {
+            Ok(opened) => {
+                // A new run starts with a clean status; what goes wrong in
+                // closing the old one still shows.
+                self.set_error(None);
+                self.finish();
+                self.stop_recording();
+                if opened.info.parent.is_none() {
+                    self.series.clear();
+                }
+                self.tee = opened.tee;
+                let old = std::mem::replace(&mut self.rec, opened.rec);
+                let flushed = old.flush_blocking();
+                self.run = opened.run;
+                self.history = opened.history;
+                self.info = opened.info.clone();
+                self.runs.push(opened.info);
+                if let Err(e) = flushed {
+                    self.set_error(Some(format!("the previous run: {e}")));
+                }
+                true
+            }
+            Err(e) => {
+                self.set_error(Some(e));
+                false
+            }
+        }
+    }
+
+    /// Logs the run's summary and its result properties, and flushes; a
+    /// failure shows in the status.
+    fn finish(&mut self) {
+        if let Err(e) = self.end_run() {
+            self.set_error(Some(format!("ending the run: {e}")));
+        }
+    }
+
+    fn end_run(&mut self) -> Result<(), String> {
+        let figures = self.run.log_summary().map_err(|e| e.to_string())?;
+        let checks = self
+            .run
+            .scene
+            .preset()
+            .expect
+            .map(|e| verdict(&e, &figures))
+            .unwrap_or_default();
+        self.rec
+            .send_property(
+                "result",
+                &rerun::AnyValues::default()
+                    .with_component::<rerun::components::Text>(
+                        "frames",
+                        [figures.frames.to_string()],
+                    )
+                    .with_component::<rerun::components::Text>(
+                        "final_state",
+                        [figures.final_state.clone()],
+                    )
+                    .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
+            )
+            .map_err(|e| e.to_string())?;
+        self.rec.flush_blocking().map_err(|e| e.to_string())
+    }
+
+    /// Closes the recording file, if there is one.
+    fn stop_recording(&mut self) {
+        if let Err(e) = self.tee.stop() {
+            self.set_error(Some(e));
+        }
+        self.status.lock().expect("not poisoned").recording = None;
+    }
+
+    fn step(&mut self) {
+        let start = Instant::now();
+        let frame = self.run.scene.frame() + 1;
+        self.history.tuning(frame, self.run.scene.tuning());
+        match self.run.step() {
+            Ok(()) => {
+                let run = &self.run;
+                self.history
+                    .stepped(frame, run.scene.time(), || run.snapshot());
+                if let Some(d) = run.scene.solver().diagnostics() {
+                    let mut values = [0.0; 2 + Family::COUNT];
+                    values[0] = d.max_strain;
+                    values[1] = d.kinetic_energy;
+                    for f in Family::ALL {
+                        values[2 + f.index()] = d.family(f).violation.max;
+                    }
+                    self.series.push((frame, run.scene.time(), values));
+                }
+            }
+            Err(e) => {
+                self.playing = false;
+                self.set_error(Some(e.to_string()));
+            }
+        }
+        let now = Instant::now();
+        self.recent.push_back(now);
+        while self
+            .recent
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.recent.pop_front();
+        }
+        let mut s = self.status.lock().expect("not poisoned");
+        s.step_ms = start.elapsed().as_secs_f32() * 1e3;
+        drop(s);
+        self.publish_progress();
+    }
+
+    fn set_error(&self, e: Option<String>) {
+        self.status.lock().expect("not poisoned").error = e;
+    }
+
+    /// Publishes everything, the preset included (after a command).
+    fn publish(&self) {
+        let mut preset = self.run.scene.preset().clone();
+        preset.telemetry = *self.run.telemetry.settings();
+        let progress = self.progress();
+        // One lock, so a reader never sees a new run with an old frame.
+        let mut s = self.status.lock().expect("not poisoned");
+        s.preset_name = self.name.clone();
+        s.preset = Some(preset);
+        s.run = self.info.clone();
+        s.runs = self.runs.clone();
+        progress.write(&mut s);
+    }
+
+    /// Publishes what a step changes (the preset does not change on a step).
+    fn publish_progress(&self) {
+        let progress = self.progress();
+        progress.write(&mut self.status.lock().expect("not poisoned"));
+    }
+
+    fn progress(&self) -> Progress {
+        let scene = &self.run.scene;
+        let figures = self.run.figures();
+        let checks = scene
+            .preset()
+            .expect
+            .map(|e| verdict(&e, &figures))
+            .unwrap_or_default();
+        Progress {
+            frame: scene.frame(),
+            time: scene.time(),
+            playing: self.playing,
+            speed: self.speed,
+            steps_per_second: self.recent.len() as f32,
+            violations: scene
+                .solver()
+                .diagnostics()
+                .map(|d| (d.families.map(|_, f| f.violation.max), d.max_strain)),
+            digest: figures.final_state,
+            checks,
+            checkpoints: self.history.checkpoints(),
+            particle: self.inspect.map(|i| readout(scene, i)),
+        }
+    }
+}
+
+/// What a step changes in the [`Status`], gathered before taking its lock.
+struct Progress {
+    frame: u64,
+    time: f64,
+    playing: bool,
+    speed: f32,
+    steps_per_second: f32,
+    violations: Option<(PerFamily<f32>, f32)>,
+    digest: String,
+    checks: Vec<Check>,
+    checkpoints: (usize, u64),
+    particle: Option<ParticleReadout>,
+}
+
+impl Progress {
+    fn write(self, s: &mut Status) {
+        s.frame = self.frame;
+        s.time = self.time;
+        s.playing = self.playing;
+        s.speed = self.speed;
+        s.steps_per_second = self.steps_per_second;
+        if let Some((max_violation, max_strain)) = self.violations {
+            s.max_violation = max_violation;
+            s.max_strain = max_strain;
+        }
+        s.digest = self.digest;
+        s.checks = self.checks;
+        s.checkpoints = self.checkpoints;
+        s.particle = self.particle;
+    }
+}
+
+/// What the inspector shows of particle `i`.
+fn readout(scene: &Scene, i: usize) -> ParticleReadout {
+    let solver = scene.solver();
+    let weft = solver.spec().weft;
+    let mut r = ParticleReadout {
+        index: i,
+        cell: (i as u32 % weft, i as u32 / weft),
+        strain: solver.particle_strain()[i],
+        ..ParticleReadout::default()
+    };
+    for f in Family::ALL {
+        r.violation[f] = solver.particle_violation(f)[i];
+        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
+            r.dx[f] = d.family(f).dx[i];
+            r.dtheta[f] = d.family(f).dtheta[i];
+        }
+    }
+    r
+}
