@@ -56,7 +56,7 @@ pub(crate) fn project<R: Recorder>(
 
 /// The unit axis that turns `na` toward `nb`, and the angle between them;
 /// `None` when they agree. Exactly opposite normals turn about `na × edge`.
-#[inline]
+#[inline(always)]
 fn axis_angle(na: Vec3, nb: Vec3, edge: Vec3) -> Option<(Vec3, f32)> {
     let axis = na.cross(nb);
     let sin = axis.length();

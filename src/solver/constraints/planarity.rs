@@ -42,7 +42,7 @@ pub(crate) fn project<R: Recorder>(
 /// direction `n⊥` of the normal across the edge. `None` when the edge is
 /// degenerate or the normal lies along it (an unstable balance the other
 /// families break).
-#[inline]
+#[inline(always)]
 fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
     let len = s.length();
     if len <= 1e-9 {
