@@ -295,10 +295,7 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     }
     let figures = run.finish()?;
     drop(rec);
-    let checks = preset
-        .expect
-        .map(|e| verdict(&e, &figures))
-        .unwrap_or_default();
+    let checks = verdict(preset.expect.as_ref(), &figures);
     eprint!("{}", table(&figures, &checks));
     if let Some(path) = &args.summary {
         let json = serde_json::json!({ "figures": figures, "checks": checks });

@@ -92,11 +92,7 @@ impl RunData {
             }
             None => rebuild_figures(&rec),
         };
-        let checks = preset
-            .as_ref()
-            .and_then(|p| p.expect)
-            .map(|e| verdict(&e, &figures))
-            .unwrap_or_default();
+        let checks = verdict(preset.as_ref().and_then(|p| p.expect.as_ref()), &figures);
 
         let mut changes = Vec::new();
         let mut last: Option<Tuning> = None;
@@ -274,19 +270,14 @@ pub fn preset_diff(runs: &[RunData]) -> Vec<(String, Vec<Option<String>>)> {
         .collect()
 }
 
-/// Whether a key is part of the tuning or the telemetry, which may differ
-/// between runs whose particle states are still comparable.
+/// Whether a key may differ between runs whose particle states are still
+/// comparable: the tuning (what may change while a scene runs), and what does
+/// not touch the simulation (telemetry, bounds, description, duration).
 fn is_tuning(key: &str) -> bool {
-    [
-        "solver.",
-        "environment.wind.",
-        "telemetry.",
-        "expect.",
-        "expect",
-    ]
-    .iter()
-    .any(|p| key.starts_with(p))
-        || matches!(key, "description" | "duration")
+    Tuning::is_live(key)
+        || ["telemetry", "expect", "description", "duration"]
+            .iter()
+            .any(|s| key == *s || key.starts_with(&format!("{s}.")))
 }
 
 /// Why two runs' particle states cannot be compared, if they cannot.

@@ -186,7 +186,7 @@ pub fn write(
     runs: &[RunData],
     placement: Placement,
     report: &str,
-) -> rerun::RecordingStreamResult<()> {
+) -> anyhow::Result<()> {
     rec.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
     rec.log_static(
         "runs",
@@ -273,7 +273,7 @@ pub fn write(
             }
         }
     }
-    rec.flush_blocking().ok();
+    rec.flush_blocking()?;
     Ok(())
 }
 

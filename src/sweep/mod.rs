@@ -357,16 +357,12 @@ pub fn run_point(
     if let Err(crate::record::RunError::Telemetry(e)) = &outcome {
         return Err(format!("{}: {e}", point.name));
     }
+    // `finish` flushes the file; only a complete one is renamed into place.
     let figures = run.finish().map_err(|e| format!("{}: {e}", point.name))?;
-    stream.flush_blocking().ok();
     drop(stream);
     std::fs::rename(&part, &rrd)
         .map_err(|e| format!("renaming {} into place: {e}", part.display()))?;
-    let checks = loaded
-        .preset
-        .expect
-        .map(|e| verdict(&e, &figures))
-        .unwrap_or_default();
+    let checks = verdict(loaded.preset.expect.as_ref(), &figures);
     let result = PointResult {
         index: point.index,
         name: point.name.clone(),

@@ -289,13 +289,7 @@ impl Worker {
 
     fn end_run(&mut self) -> Result<(), String> {
         let figures = self.run.log_summary().map_err(|e| e.to_string())?;
-        let checks = self
-            .run
-            .scene
-            .preset()
-            .expect
-            .map(|e| verdict(&e, &figures))
-            .unwrap_or_default();
+        let checks = verdict(self.run.scene.preset().expect.as_ref(), &figures);
         self.rec
             .send_property(
                 "result",
@@ -388,11 +382,7 @@ impl Worker {
     fn progress(&self) -> Progress {
         let scene = &self.run.scene;
         let figures = self.run.figures();
-        let checks = scene
-            .preset()
-            .expect
-            .map(|e| verdict(&e, &figures))
-            .unwrap_or_default();
+        let checks = verdict(scene.preset().expect.as_ref(), &figures);
         Progress {
             frame: scene.frame(),
             time: scene.time(),
