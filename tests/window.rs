@@ -53,11 +53,16 @@ fn the_window_shows_the_cloth_and_the_panel() {
     let img = image::open(&shot).unwrap().to_rgba8();
     assert_eq!((img.width(), img.height()), (1400, 860));
 
-    // The 3D view (left of the plots): the cloth's particles, coloured by
-    // strain (the ramp starts blue), on the scene's ground and car.
+    // The 3D view (left of the plots): the cloth, on the scene's ground and
+    // car. At level `full` its particles carry the families' correction
+    // arrows, in strongly saturated colours (as is the strain ramp), where
+    // the ground, the car and the sky are greys of saturation below 50. The
+    // cloth's colours change with its state at the captured frame, which
+    // the simulation thread does not wait for; their saturation does not
+    // (115-135 such pixels, a share of 7e-4, in every capture seen).
     let view = ((0.15, 0.39), (0.07, 0.66));
     let cloth = share(&img, view.0, view.1, |[r, g, b, _]| {
-        b > 150 && r < 110 && g < 140
+        r.max(g).max(b) - r.min(g).min(b) > 70
     });
     assert!(cloth > 2e-4, "no cloth in the 3D view ({cloth})");
     let lit = share(&img, view.0, view.1, |[r, g, b, _]| {
