@@ -105,21 +105,23 @@ fn step_by_size(c: &mut Criterion) {
 fn threads(c: &mut Criterion) {
     let mut g = c.benchmark_group("threads");
     g.sample_size(20);
-    for threads in [1usize, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let mut s = pool.install(|| weft_sheet(128, Weights::default_weights()));
-        g.bench_with_input(
-            BenchmarkId::new("weft 128x128", threads),
-            &threads,
-            |b, _| {
-                b.iter(|| {
-                    pool.install(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
-                })
-            },
-        );
+    for n in [64u32, 128] {
+        for threads in [1usize, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut s = pool.install(|| weft_sheet(n, Weights::default_weights()));
+            g.bench_with_input(
+                BenchmarkId::new(format!("weft {n}x{n}"), threads),
+                &threads,
+                |b, _| {
+                    b.iter(|| {
+                        pool.install(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
+                    })
+                },
+            );
+        }
     }
     g.finish();
 }

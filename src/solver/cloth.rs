@@ -259,8 +259,11 @@ pub fn turn_by(q: Quat, r: Vec3) -> Quat {
     let t2 = r.length_squared();
     let d = if t2 < 0.0025 {
         // cos(θ/2) ≈ 1 − θ²/8 + θ⁴/384,  sin(θ/2)/θ ≈ ½ − θ²/48 + θ⁴/3840
-        let c = 1.0 - t2 / 8.0 + t2 * t2 / 384.0;
-        let s = 0.5 - t2 / 48.0 + t2 * t2 / 3840.0;
+        // (Multiplied by the reciprocals: a division by a constant that is
+        // not a power of two stays a division.)
+        let t4 = t2 * t2;
+        let c = 1.0 - t2 * (1.0 / 8.0) + t4 * (1.0 / 384.0);
+        let s = 0.5 - t2 * (1.0 / 48.0) + t4 * (1.0 / 3840.0);
         Quat::from_xyzw(r.x * s, r.y * s, r.z * s, c)
     } else if t2.is_finite() {
         let t = t2.sqrt();

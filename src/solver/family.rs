@@ -23,11 +23,12 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::cloth::ClothState;
 use super::constraints::{
-    Particles, Recorder, curvature, normality, planarity, project_batches, stretch,
+    Particles, Recorder, Shared, curvature, normality, planarity, project_batches, stretch,
 };
 use super::diagnostics::Violation;
 use super::forced_rotation::ForcedRotation;
 use super::params::{REFERENCE_COMPLIANCE, compliance_factor};
+use super::team::Crew;
 use super::topology::{Batched, Pair, Topology};
 
 /// The constraint families of the adjust phase.
@@ -223,6 +224,16 @@ impl<T: Default> Default for PerFamily<T> {
     }
 }
 
+impl<T> IntoIterator for PerFamily<T> {
+    type Item = T;
+    type IntoIter = std::array::IntoIter<T, { Family::COUNT }>;
+
+    /// The values in [`Family::index`] order (as [`PerFamily::iter_mut`]).
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.into_iter()
+    }
+}
+
 impl<T> Index<Family> for PerFamily<T> {
     type Output = T;
     fn index(&self, f: Family) -> &T {
@@ -327,6 +338,29 @@ impl Multipliers {
         zero2(&mut self.planarity, topology.structural.len());
         zero2(&mut self.curvature, topology.bend.len());
     }
+
+    /// The multipliers as the threads of the adjust phase share them.
+    pub(crate) fn shared(&mut self) -> SharedMultipliers<'_> {
+        SharedMultipliers {
+            structural: Shared::new(&mut self.structural),
+            tethers: Shared::new(&mut self.tethers),
+            shear: Shared::new(&mut self.shear),
+            normality: Shared::new(&mut self.normality),
+            planarity: Shared::new(&mut self.planarity),
+            curvature: Shared::new(&mut self.curvature),
+        }
+    }
+}
+
+/// [`Multipliers`], written by the threads of the adjust phase, each
+/// constraint's by the thread that projects it.
+pub(crate) struct SharedMultipliers<'a> {
+    structural: Shared<'a, f32>,
+    tethers: Shared<'a, f32>,
+    shear: Shared<'a, f32>,
+    normality: Shared<'a, f32>,
+    planarity: Shared<'a, [f32; 2]>,
+    curvature: Shared<'a, [f32; 2]>,
 }
 
 /// What every family's projection in one sweep reads: the constraints, the
@@ -341,8 +375,14 @@ pub(crate) struct Sweep<'a> {
 
 impl Sweep<'_> {
     /// Projects every constraint of one family once, colour batch by colour
-    /// batch, each with its multiplier in `mu`.
-    pub(crate) fn project<R: Recorder>(&self, family: Family, mu: &mut Multipliers, rec: &mut R) {
+    /// batch, each with its multiplier in `mu`; `crew` shares the batches.
+    pub(crate) fn project<R: Recorder>(
+        &self,
+        crew: &Crew,
+        family: Family,
+        mu: &SharedMultipliers,
+        rec: &mut R,
+    ) {
         let Self {
             topology,
             tethers,
@@ -354,16 +394,18 @@ impl Sweep<'_> {
         match family {
             Family::Stretch => {
                 project_batches(
+                    crew,
                     &structural.items,
-                    &mut mu.structural,
+                    &mu.structural,
                     &structural.batches,
                     rec,
                     |c, m, r| stretch::project(p, c, m, k.stretch, r),
                 );
                 // Each particle appears once per tether batch.
                 project_batches(
+                    crew,
                     &tethers.items,
-                    &mut mu.tethers,
+                    &mu.tethers,
                     &tethers.batches,
                     rec,
                     |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
@@ -371,8 +413,9 @@ impl Sweep<'_> {
             }
             Family::Planarity => {
                 project_batches(
+                    crew,
                     &structural.items,
-                    &mut mu.planarity,
+                    &mu.planarity,
                     &structural.batches,
                     rec,
                     |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
@@ -380,15 +423,17 @@ impl Sweep<'_> {
             }
             Family::Normality => {
                 project_batches(
+                    crew,
                     &structural.items,
-                    &mut mu.normality,
+                    &mu.normality,
                     &structural.batches,
                     rec,
                     |c, m, r| normality::project(p, c, m, k.normality, rot, r),
                 );
                 project_batches(
+                    crew,
                     &shear.items,
-                    &mut mu.shear,
+                    &mu.shear,
                     &shear.batches,
                     rec,
                     |c, m, r| stretch::project(p, c, m, k.shear, r),
@@ -396,8 +441,9 @@ impl Sweep<'_> {
             }
             Family::Curvature => {
                 project_batches(
+                    crew,
                     &bend.items,
-                    &mut mu.curvature,
+                    &mu.curvature,
                     &bend.batches,
                     rec,
                     |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),

@@ -37,6 +37,7 @@
 //! assert!(solver.state().position[0].z < -0.1); // the free corner fell
 //! ```
 
+mod adjust;
 pub mod cloth;
 pub mod collision;
 pub mod constraints;
@@ -44,6 +45,7 @@ pub mod diagnostics;
 pub mod family;
 pub mod forced_rotation;
 pub mod params;
+mod team;
 pub mod topology;
 pub mod update;
 
@@ -62,10 +64,11 @@ pub use update::Environment;
 
 use glam::Vec3;
 
+use adjust::{Adjust, Colliders};
 use collision::Contact;
-use constraints::{NoRecord, Particles, stretch};
+use constraints::{NoRecord, Particles, Shared, stretch};
 use diagnostics::FamilyRecorder;
-use family::{Compliance, Multipliers, SWEEP, Sweep};
+use family::{Compliance, Multipliers, Sweep};
 use update::{FREE, Reference};
 
 /// A particle that follows a body exactly.
@@ -525,48 +528,59 @@ impl Solver {
             self.collider_to.push(c.world_pose(&self.sub_to));
         }
         self.contacts.fill(Contact::default());
-        let margin = 0.5 * self.spec.thickness;
         self.multipliers
             .reset(&self.topology, self.tethers.items.len());
         let compliance = Compliance::new(&self.params.weights, dt);
-
-        for _ in 0..self.params.iterations {
-            for family in SWEEP {
-                if self.params.weights[family] == 0.0 {
-                    continue;
-                }
-                let p = Particles::new(
-                    &mut self.state.position,
-                    &mut self.state.orientation,
-                    &self.inv_mass,
-                    &self.inv_inertia,
-                );
-                let sweep = Sweep {
-                    topology: &self.topology,
-                    tethers: &self.tethers,
-                    p: &p,
-                    k: &compliance,
-                    rot,
-                };
-                let mu = &mut self.multipliers;
-                match self.diagnostics.as_deref_mut() {
-                    None => sweep.project(family, mu, &mut NoRecord),
-                    Some(d) => {
-                        let t = Instant::now();
-                        let fd = &mut d.families[family];
-                        if d.corrections {
-                            let mut rec = FamilyRecorder::new(fd);
-                            sweep.project(family, mu, &mut rec);
-                            fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
-                        } else {
-                            sweep.project(family, mu, &mut NoRecord);
-                        }
-                        fd.time += t.elapsed();
-                    }
-                }
+        let threads = self.threads();
+        let p = Particles::new(
+            &mut self.state.position,
+            &mut self.state.orientation,
+            &self.inv_mass,
+            &self.inv_inertia,
+        );
+        let adjust = Adjust {
+            sweep: Sweep {
+                topology: &self.topology,
+                tethers: &self.tethers,
+                p: &p,
+                k: &compliance,
+                rot,
+            },
+            mu: self.multipliers.shared(),
+            weights: &self.params.weights,
+            iterations: self.params.iterations,
+            colliders: (!self.colliders.is_empty()).then(|| Colliders {
+                shapes: &self.colliders,
+                poses: &self.collider_to,
+                margin: 0.5 * self.spec.thickness,
+                contacts: Shared::new(&mut self.contacts),
+            }),
+        };
+        match self.diagnostics.as_deref_mut() {
+            None => {
+                adjust.run(threads, &mut PerFamily::splat(NoRecord), false);
             }
-            self.project_colliders(margin);
+            Some(d) => {
+                let times = if d.corrections {
+                    let mut fds = d.families.iter_mut();
+                    let mut recs =
+                        PerFamily::from_fn(|_| FamilyRecorder::new(fds.next().expect("a family")));
+                    drop(fds);
+                    let times = adjust.run(threads, &mut recs, true);
+                    for (fd, rec) in d.families.iter_mut().zip(recs) {
+                        fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
+                    }
+                    times
+                } else {
+                    adjust.run(threads, &mut PerFamily::splat(NoRecord), true)
+                };
+                for (fd, t) in d.families.iter_mut().zip(times.families) {
+                    fd.time += t;
+                }
+                d.timings.collisions += times.collisions;
+            }
         }
+        let margin = 0.5 * self.spec.thickness;
         if !self.colliders.is_empty() {
             collision::apply_friction(
                 &mut self.state.position,
@@ -585,6 +599,17 @@ impl Solver {
             *q = q.normalize();
         }
         self.check_finite("adjust")
+    }
+
+    /// How many threads the adjust phase may use: one for a cloth too small
+    /// to share (a barrier costs more than its batches), else as many as
+    /// rayon allows here ([`team`]).
+    fn threads(&self) -> usize {
+        if self.state.len() < PARALLEL_MIN_PARTICLES {
+            1
+        } else {
+            team::available()
+        }
     }
 
     /// Pushes every free particle out of every collider (timed in diagnostics).
@@ -633,6 +658,11 @@ impl Solver {
         Ok(())
     }
 }
+
+/// Particles below which the adjust phase runs on one thread: on smaller
+/// cloths a barrier costs about as much as a colour batch (measured in
+/// BENCHMARKS.md: 2 threads lose on 256 and 280 particles, gain from 384).
+const PARALLEL_MIN_PARTICLES: usize = 320;
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);

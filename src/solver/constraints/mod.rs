@@ -37,33 +37,86 @@ pub mod normality;
 pub mod planarity;
 pub mod stretch;
 
+use std::ops::Range;
+
 use glam::{Quat, Vec3};
 
 use super::cloth::turn_by;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
+use super::team::Crew;
+
+/// A slice that the threads of a parallel region write element by element.
+///
+/// Sound only under the colour discipline: within a colour batch, no two
+/// threads touch the same element (each constraint, and so its multiplier,
+/// belongs to one thread's share; no two constraints of a batch share a
+/// free particle), and a [`Crew::barrier`] separates batches.
+pub(crate) struct Shared<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: see the type's documentation: concurrent access is to distinct
+// elements only.
+unsafe impl<T: Send> Sync for Shared<'_, T> {}
+unsafe impl<T: Send> Send for Shared<'_, T> {}
+
+impl<'a, T> Shared<'a, T> {
+    /// A view of `slice`, borrowed for `'a`.
+    pub fn new(slice: &'a mut [T]) -> Self {
+        Self {
+            ptr: slice.as_mut_ptr(),
+            len: slice.len(),
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Element `i`, to read and write.
+    ///
+    /// # Safety
+    /// `i < len`, and no other thread accesses element `i` until the next
+    /// barrier.
+    #[inline(always)]
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn get(&self, i: usize) -> &mut T {
+        debug_assert!(i < self.len);
+        // SAFETY: the caller's promise.
+        unsafe { &mut *self.ptr.add(i) }
+    }
+
+    /// Elements `range`, to read and write.
+    ///
+    /// # Safety
+    /// `range` within `0..len`, and no other thread accesses these elements
+    /// until the next barrier.
+    #[allow(clippy::mut_from_ref)]
+    pub unsafe fn slice(&self, range: Range<usize>) -> &mut [T] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        // SAFETY: in bounds (checked); exclusive by the caller's promise.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.len()) }
+    }
+}
 
 /// What a projection reads and writes: positions and orientations through
 /// per-index accessors, masses and inertias as slices.
 ///
-/// One view is shared by every thread projecting a colour batch. That is
-/// sound because of the colouring: no two constraints of a batch touch the
-/// same free particle, so no element is written by one thread while another
-/// reads or writes it. Driven particles may be read by many constraints of a
-/// batch (tether anchors), but no projection writes a particle with zero
-/// inverse mass or inertia.
+/// One view is shared by every thread of the adjust phase's region (see
+/// [`Shared`]). Driven particles may be read by many constraints of a batch
+/// (tether anchors), but no projection writes a particle with zero inverse
+/// mass or inertia.
 pub(crate) struct Particles<'a> {
-    x: *mut Vec3,
-    q: *mut Quat,
-    len: usize,
+    pub x: Shared<'a, Vec3>,
+    q: Shared<'a, Quat>,
     pub inv_mass: &'a [f32],
     pub inv_inertia: &'a [f32],
-    _borrow: std::marker::PhantomData<&'a mut [Vec3]>,
 }
-
-// SAFETY: see the type's documentation: concurrent access is to distinct
-// elements only, which the colour batches guarantee.
-unsafe impl Sync for Particles<'_> {}
 
 impl<'a> Particles<'a> {
     /// A view of the state, borrowed for `'a`.
@@ -75,46 +128,40 @@ impl<'a> Particles<'a> {
     ) -> Self {
         assert!(x.len() == q.len() && x.len() == inv_mass.len() && x.len() == inv_inertia.len());
         // Every index a projection uses comes from the topology or the
-        // tethers, both built for this cloth and checked in debug builds
+        // tethers, both built for this cloth and checked when built
         // (`Topology::grid`, `stretch::tethers`): in bounds by construction.
         Self {
-            len: x.len(),
-            x: x.as_mut_ptr(),
-            q: q.as_mut_ptr(),
+            x: Shared::new(x),
+            q: Shared::new(q),
             inv_mass,
             inv_inertia,
-            _borrow: std::marker::PhantomData,
         }
     }
 
     /// Position of particle `i`.
     #[inline(always)]
     pub fn x(&self, i: usize) -> Vec3 {
-        debug_assert!(i < self.len);
-        // SAFETY: in bounds; exclusive per batch (see the type's docs).
-        unsafe { *self.x.add(i) }
+        // SAFETY: in bounds; exclusive per batch (see `Shared`).
+        unsafe { *self.x.get(i) }
     }
 
     /// Orientation of particle `i`.
     #[inline(always)]
     pub fn q(&self, i: usize) -> Quat {
-        debug_assert!(i < self.len);
-        // SAFETY: in bounds; exclusive per batch (see the type's docs).
-        unsafe { *self.q.add(i) }
+        // SAFETY: in bounds; exclusive per batch (see `Shared`).
+        unsafe { *self.q.get(i) }
     }
 
     #[inline(always)]
     fn set_x(&self, i: usize, v: Vec3) {
-        debug_assert!(i < self.len);
-        // SAFETY: in bounds; exclusive per batch (see the type's docs).
-        unsafe { *self.x.add(i) = v }
+        // SAFETY: in bounds; exclusive per batch (see `Shared`).
+        unsafe { *self.x.get(i) = v }
     }
 
     #[inline(always)]
     fn set_q(&self, i: usize, v: Quat) {
-        debug_assert!(i < self.len);
-        // SAFETY: in bounds; exclusive per batch (see the type's docs).
-        unsafe { *self.q.add(i) = v }
+        // SAFETY: in bounds; exclusive per batch (see `Shared`).
+        unsafe { *self.q.get(i) = v }
     }
 }
 
@@ -148,11 +195,6 @@ impl Recorder for NoRecord {
     fn join(&mut self, _: Self) {}
 }
 
-/// Constraints per colour batch below which one thread beats several.
-const PARALLEL_MIN: usize = 4096;
-/// Constraints per parallel task.
-const CHUNK: usize = 1024;
-
 /// The XPBD step of one constraint: the change of its multiplier `μ` for a
 /// violation `c`, a generalised inverse mass `w` and a compliance
 /// `alpha_t = α / Δt²`.
@@ -162,50 +204,31 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 }
 
 /// Projects `items` colour batch by colour batch with `project`, each with
-/// its own multiplier in `mu` (same index); large batches are split across
-/// rayon's threads. Within a batch the order does not matter (no shared
-/// particles), so the result is bit-identical for any number of threads.
+/// its own multiplier in `mu` (same index). Every thread of `crew` takes its
+/// share of each batch and waits for the others before the next: within a
+/// batch the order does not matter (no shared particles), so the result is
+/// bit-identical for any number of threads.
 pub(crate) fn project_batches<T, M, R>(
+    crew: &Crew,
     items: &[T],
-    mu: &mut [M],
-    batches: &[std::ops::Range<usize>],
+    mu: &Shared<M>,
+    batches: &[Range<usize>],
     rec: &mut R,
-    project: impl Fn(T, &mut M, &mut R) + Sync,
+    project: impl Fn(T, &mut M, &mut R),
 ) where
-    T: Copy + Sync,
-    M: Send,
+    T: Copy,
     R: Recorder,
 {
-    use rayon::prelude::*;
-    debug_assert_eq!(items.len(), mu.len());
+    assert_eq!(items.len(), mu.len());
     for range in batches {
-        let batch = &items[range.clone()];
-        let mu = &mut mu[range.clone()];
-        if batch.len() < PARALLEL_MIN || rayon::current_num_threads() == 1 {
-            for (&c, m) in batch.iter().zip(mu) {
-                project(c, m, rec);
-            }
-        } else {
-            let base: &R = rec;
-            let gathered = batch
-                .par_chunks(CHUNK)
-                .zip(mu.par_chunks_mut(CHUNK))
-                .map(|(chunk, mu)| {
-                    let mut r = base.fork();
-                    for (&c, m) in chunk.iter().zip(mu) {
-                        project(c, m, &mut r);
-                    }
-                    r
-                })
-                .reduce(
-                    || base.fork(),
-                    |mut a, b| {
-                        a.join(b);
-                        a
-                    },
-                );
-            rec.join(gathered);
+        let mine = crew.share(range.len());
+        let start = range.start + mine.start;
+        for (k, &item) in items[start..range.start + mine.end].iter().enumerate() {
+            // SAFETY: `start + k < items.len() == mu.len()`; shares are
+            // disjoint, so this multiplier is this thread's until the barrier.
+            project(item, unsafe { mu.get(start + k) }, rec);
         }
+        crew.barrier();
     }
 }
 
@@ -231,40 +254,64 @@ pub(crate) fn shift<R: Recorder>(p: &Particles, i: usize, dx: Vec3, rec: &mut R)
     }
 }
 
-/// `atan2(y, x)`, without a libm call: the series `t − t³/3 + t⁵/5 − t⁷/7`
-/// (`t = y/x`) for the small angles that dominate (error below 1e-10), and
-/// elsewhere a polynomial in `t²` on `|t| ≤ 1` (least-squares fit, error
-/// below 2e-7 rad in `f32`) with the usual octant reduction. Pure arithmetic,
-/// so the same on every machine. NaN in, NaN out.
+/// `atan2(y, x)`, without a libm call: [`atan`] of `y / x` with the
+/// quadrant restored. Pure arithmetic, so the same on every machine. NaN in,
+/// NaN out.
 #[inline]
 pub(crate) fn atan2(y: f32, x: f32) -> f32 {
-    if x > 0.0 && y.abs() < 0.05 * x {
-        let t = y / x;
-        let t2 = t * t;
-        return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 / 7.0)));
+    if x > 0.0 {
+        return atan(y / x);
     }
     if x.is_nan() || y.is_nan() {
         return f32::NAN;
     }
-    let (ay, ax) = (y.abs(), x.abs());
-    if ay == 0.0 && ax == 0.0 {
-        return 0.0;
+    if x == 0.0 {
+        return if y == 0.0 {
+            0.0
+        } else {
+            std::f32::consts::FRAC_PI_2.copysign(y)
+        };
     }
-    let (t, steep) = if ay <= ax {
-        (ay / ax, false)
-    } else {
-        (ax / ay, true)
-    };
-    let t2 = t * t;
-    let p = ATAN_POLY.iter().rev().fold(0.0f32, |acc, &c| acc * t2 + c);
-    let mut a = t * p;
-    if steep {
-        a = std::f32::consts::FRAC_PI_2 - a;
+    // x < 0: the angle lies in the second or third quadrant.
+    let a = std::f32::consts::PI - atan((y / x).abs());
+    a.copysign(y)
+}
+
+/// `atan(t)`: the series `t − t³/3 + t⁵/5 − t⁷/7` for the small angles that
+/// dominate (`|t| < 0.05`, error below 1e-10), and elsewhere a polynomial in
+/// `t²` on `|t| ≤ 1` (least-squares fit, error below 2e-7 rad in `f32`),
+/// evaluated by Estrin's scheme (half the dependent multiplications of
+/// Horner's), with `atan(t) = π/2 − atan(1/t)` beyond. NaN in, NaN out.
+#[inline]
+pub(crate) fn atan(t: f32) -> f32 {
+    let a = t.abs();
+    if a < 0.05 {
+        let t2 = t * t;
+        return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 * (1.0 / 7.0))));
     }
-    if x < 0.0 {
-        a = std::f32::consts::PI - a;
+    if a > 1.0 {
+        return atan_steep(a).copysign(t);
     }
-    if y < 0.0 { -a } else { a }
+    atan_poly(a).copysign(t)
+}
+
+/// `atan(u)` for `0 ≤ u ≤ 1` by the fitted polynomial, in Estrin's scheme.
+#[inline(always)]
+fn atan_poly(u: f32) -> f32 {
+    let z = u * u;
+    let z2 = z * z;
+    let c = &ATAN_POLY;
+    let low = (c[0] + c[1] * z) + (c[2] + c[3] * z) * z2;
+    let high = (c[4] + c[5] * z) + (c[6] + c[7] * z) * z2;
+    u * (low + high * (z2 * z2))
+}
+
+/// `atan(a)` for `a > 1`, rare in the kernels: out of line, so that its
+/// division is not computed ahead on the common path.
+#[cold]
+#[inline(never)]
+fn atan_steep(a: f32) -> f32 {
+    std::f32::consts::FRAC_PI_2 - atan_poly(a.recip())
 }
 
 /// `atan(t) / t` as a polynomial in `t²` on `[0, 1]`, lowest power first.
@@ -278,3 +325,28 @@ const ATAN_POLY: [f32; 8] = [
     0.021_862_866,
     -0.004_054_539_4,
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::{atan, atan2};
+
+    #[test]
+    fn atan_and_atan2_match_the_standard_library() {
+        let mut worst = 0.0f32;
+        for i in -2000..=2000 {
+            let t = i as f32 * 0.01 + 0.0031;
+            worst = worst.max((atan(t) - t.atan()).abs());
+            for j in -40..=40 {
+                let (y, x) = (t, j as f32 * 0.25 + 0.001);
+                worst = worst.max((atan2(y, x) - y.atan2(x)).abs());
+            }
+        }
+        assert!(worst < 5e-7, "largest error {worst}");
+        assert_eq!(atan2(0.0, 0.0), 0.0);
+        assert_eq!(atan2(1.0, 0.0), std::f32::consts::FRAC_PI_2);
+        assert_eq!(atan2(-1.0, 0.0), -std::f32::consts::FRAC_PI_2);
+        assert!((atan2(0.0, -1.0) - std::f32::consts::PI).abs() < 1e-6);
+        assert!(atan2(f32::NAN, 1.0).is_nan() && atan2(1.0, f32::NAN).is_nan());
+        assert!(atan(f32::NAN).is_nan());
+    }
+}

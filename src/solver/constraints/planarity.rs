@@ -57,7 +57,7 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
     }
     let inv_cos = cos.recip();
     Some((
-        super::atan2(sin, cos),
+        super::atan(sin * inv_cos),
         axis * inv_cos,
         (n - dir * sin) * inv_cos,
         len,

@@ -1,0 +1,135 @@
+//! The adjust phase of one substep (§3.3–3.4): `iterations` sweeps over the
+//! constraint families in [`SWEEP`] order, each sweep followed by the
+//! colliders, all in one parallel region ([`team`](super::team)).
+//!
+//! Every thread of the crew walks the same sequence: for each family, each
+//! of its constraint sets, each colour batch, it projects its share of the
+//! batch and waits at a barrier; then it pushes its share of the particles
+//! out of the colliders (each particle on its own, colliders in index
+//! order) and waits again. Because no two constraints of a colour share a
+//! free particle, and a particle's collider pass reads only that particle,
+//! the state after the phase is the same bit for bit for any number of
+//! threads, and the same as one thread walking the sequence alone.
+//!
+//! Thread 0 times the families and the colliders for the diagnostics: the
+//! time from the end of one section to the end of the next, barriers
+//! included, which is the wall time the section costs the step.
+
+use std::time::{Duration, Instant};
+
+use super::collision::{self, Collider, Contact, Pose};
+use super::constraints::{Recorder, Shared};
+use super::family::{PerFamily, SWEEP, SharedMultipliers, Sweep};
+use super::team::{self, Crew};
+
+/// Everything one adjust phase reads and writes.
+pub(crate) struct Adjust<'a> {
+    /// The constraints, the state, the compliances and Eq. 3.
+    pub sweep: Sweep<'a>,
+    /// Every constraint's multiplier over the substep.
+    pub mu: SharedMultipliers<'a>,
+    /// Families with weight 0 are skipped.
+    pub weights: &'a PerFamily<f32>,
+    /// Sweeps in the phase.
+    pub iterations: u32,
+    /// The colliders, if there are any.
+    pub colliders: Option<Colliders<'a>>,
+}
+
+/// The colliders at the substep's end, and each particle's deepest contact.
+pub(crate) struct Colliders<'a> {
+    pub shapes: &'a [Collider],
+    pub poses: &'a [Pose],
+    /// Distance kept from a collider's surface.
+    pub margin: f32,
+    pub contacts: Shared<'a, Contact>,
+}
+
+/// Wall time of each part of the phase, as thread 0 saw it.
+#[derive(Debug, Default)]
+pub(crate) struct Times {
+    pub families: PerFamily<Duration>,
+    pub collisions: Duration,
+}
+
+impl Adjust<'_> {
+    /// Runs the phase on up to `threads` threads. Each thread records into a
+    /// fork of `recorders` (one per family), which are joined back; with
+    /// `timed`, thread 0 returns the [`Times`].
+    pub(crate) fn run<R: Recorder>(
+        &self,
+        threads: usize,
+        recorders: &mut PerFamily<R>,
+        timed: bool,
+    ) -> Times {
+        let forks = team::run(threads, |crew| {
+            let mut recs = recorders.map(|_, r| r.fork());
+            let mut clock = (timed && crew.index() == 0).then(Clock::new);
+            for _ in 0..self.iterations {
+                for family in SWEEP {
+                    if self.weights[family] == 0.0 {
+                        continue;
+                    }
+                    self.sweep
+                        .project(crew, family, &self.mu, &mut recs[family]);
+                    if let Some(c) = clock.as_mut() {
+                        let t = c.lap();
+                        c.times.families[family] += t;
+                    }
+                }
+                if let Some(colliders) = &self.colliders {
+                    self.collide(crew, colliders);
+                    if let Some(c) = clock.as_mut() {
+                        let t = c.lap();
+                        c.times.collisions += t;
+                    }
+                }
+            }
+            (recs, clock.map(|c| c.times))
+        });
+        let mut times = Times::default();
+        for (recs, t) in forks {
+            for (mine, theirs) in recorders.iter_mut().zip(recs) {
+                mine.join(theirs);
+            }
+            if let Some(t) = t {
+                times = t;
+            }
+        }
+        times
+    }
+
+    /// Pushes this thread's share of the particles out of every collider.
+    fn collide(&self, crew: &Crew, c: &Colliders) {
+        let p = self.sweep.p;
+        let mine = crew.share(p.inv_mass.len());
+        // SAFETY: shares are disjoint, and a particle's collider pass reads
+        // and writes only that particle's position and contact.
+        let (x, contacts) = unsafe { (p.x.slice(mine.clone()), c.contacts.slice(mine.clone())) };
+        collision::project(x, &p.inv_mass[mine], c.shapes, c.poses, c.margin, contacts);
+        crew.barrier();
+    }
+}
+
+/// Thread 0's stopwatch.
+struct Clock {
+    last: Instant,
+    times: Times,
+}
+
+impl Clock {
+    fn new() -> Self {
+        Self {
+            last: Instant::now(),
+            times: Times::default(),
+        }
+    }
+
+    /// Time since the last lap.
+    fn lap(&mut self) -> Duration {
+        let now = Instant::now();
+        let t = now - self.last;
+        self.last = now;
+        t
+    }
+}

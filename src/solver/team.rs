@@ -1,0 +1,195 @@
+//! A persistent parallel region: a few threads that run one closure
+//! together and meet at barriers (Box2D v3's solver does the same).
+//!
+//! The adjust phase is a long chain of short colour batches: a 64 × 64
+//! sheet projects about 40 batches of a few thousand constraints per sweep.
+//! Handing each batch to a thread pool costs about as much as the batch
+//! itself, so instead every thread of a [`Crew`] walks the whole chain at
+//! once, takes its own slice of each batch ([`Crew::share`]) and waits at a
+//! [`Crew::barrier`] before the next. A slice is fixed by the batch's length
+//! and the crew's size only, and the constraints of a colour share no free
+//! particle, so the result does not depend on the number of threads.
+//!
+//! The threads come from one private pool, created on first use, with a
+//! thread per core. Only one region runs on it at a time (two regions
+//! interleaved on the same threads could each wait at a barrier for a thread
+//! the other holds): a solver stepping while another one's region runs (as
+//! in `weft sweep --jobs`) waits for it. The crew's size follows rayon's
+//! thread count where the solver is called (`RAYON_NUM_THREADS`, or a pool's
+//! `install`), capped by the private pool.
+//!
+//! ```ignore
+//! team::run(2, |crew| {
+//!     for batch in &batches {
+//!         for k in crew.share(batch.len()) { /* project batch[k] */ }
+//!         crew.barrier();
+//!     }
+//! });
+//! ```
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, OnceLock};
+
+/// One thread's place in a parallel region.
+pub(crate) struct Crew<'a> {
+    index: usize,
+    size: usize,
+    barrier: &'a Barrier,
+}
+
+impl Crew<'_> {
+    /// This thread's index, `0..size`; thread 0 is the one that times.
+    pub(crate) fn index(&self) -> usize {
+        self.index
+    }
+
+    /// This thread's share of `len` items: contiguous, in order, and fixed
+    /// by `len` and the crew's size alone.
+    #[inline]
+    pub(crate) fn share(&self, len: usize) -> Range<usize> {
+        share(len, self.index, self.size)
+    }
+
+    /// Waits until every thread of the crew has arrived. Everything written
+    /// before it is visible to every thread after it.
+    #[inline]
+    pub(crate) fn barrier(&self) {
+        if self.size > 1 {
+            self.barrier.wait(self.size);
+        }
+    }
+}
+
+/// Item range of thread `index` of `size` over `len` items.
+#[inline]
+fn share(len: usize, index: usize, size: usize) -> Range<usize> {
+    (len * index / size)..(len * (index + 1) / size)
+}
+
+/// Runs `work` on a crew of up to `threads` threads and returns what each
+/// thread returned, in crew order.
+pub(crate) fn run<T: Send>(threads: usize, work: impl Fn(&Crew) -> T + Sync) -> Vec<T> {
+    let solo = |work: &dyn Fn(&Crew) -> T| {
+        let barrier = Barrier::default();
+        vec![work(&Crew {
+            index: 0,
+            size: 1,
+            barrier: &barrier,
+        })]
+    };
+    if threads <= 1 {
+        return solo(&work);
+    }
+    let pool = pool();
+    // A region that panicked poisons the lock but leaves nothing inconsistent.
+    let _one_at_a_time = BUSY.lock().unwrap_or_else(|e| e.into_inner());
+    let size = threads.min(pool.current_num_threads());
+    let barrier = Barrier::default();
+    pool.broadcast(|ctx| {
+        (ctx.index() < size).then(|| {
+            work(&Crew {
+                index: ctx.index(),
+                size,
+                barrier: &barrier,
+            })
+        })
+    })
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// How many threads a region may use where it is called from.
+pub(crate) fn available() -> usize {
+    rayon::current_num_threads().min(pool().current_num_threads())
+}
+
+/// Held while a region runs on the pool.
+static BUSY: Mutex<()> = Mutex::new(());
+
+fn pool() -> &'static rayon::ThreadPool {
+    static POOL: OnceLock<rayon::ThreadPool> = OnceLock::new();
+    POOL.get_or_init(|| {
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .thread_name(|i| format!("weft-solver-{i}"))
+            .build()
+            .expect("the solver's thread pool")
+    })
+}
+
+/// A reusable barrier: spins briefly (a batch takes microseconds), then
+/// yields the core, so a crew sharing the machine with other work does not
+/// burn it waiting for a thread that is not running.
+#[derive(Default)]
+struct Barrier {
+    arrived: AtomicUsize,
+    generation: AtomicUsize,
+}
+
+impl Barrier {
+    fn wait(&self, size: usize) {
+        let generation = self.generation.load(Ordering::Acquire);
+        if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == size {
+            self.arrived.store(0, Ordering::Relaxed);
+            self.generation.fetch_add(1, Ordering::Release);
+            return;
+        }
+        let mut spins = 0u32;
+        while self.generation.load(Ordering::Acquire) == generation {
+            if spins < SPINS {
+                spins += 1;
+                std::hint::spin_loop();
+            } else {
+                std::thread::yield_now();
+            }
+        }
+    }
+}
+
+/// Spins before a waiting thread yields: a few microseconds.
+const SPINS: u32 = 4000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shares_cover_every_item_once_in_order() {
+        for len in [0, 1, 2, 7, 100, 1023] {
+            for size in 1..=4 {
+                let ranges: Vec<_> = (0..size).map(|i| share(len, i, size)).collect();
+                assert_eq!(ranges[0].start, 0);
+                assert_eq!(ranges[size - 1].end, len);
+                for w in ranges.windows(2) {
+                    assert_eq!(w[0].end, w[1].start);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_barrier_orders_phases() {
+        use std::sync::atomic::AtomicU64;
+        let counter = AtomicU64::new(0);
+        let seen = run(2, |crew| {
+            let mut seen = Vec::new();
+            for _ in 0..100 {
+                counter.fetch_add(1, Ordering::Relaxed);
+                crew.barrier();
+                seen.push(counter.load(Ordering::Relaxed));
+                crew.barrier();
+            }
+            seen
+        });
+        let size = seen.len() as u64;
+        assert_eq!(size, available().min(2) as u64);
+        for s in &seen {
+            for (phase, &v) in s.iter().enumerate() {
+                assert_eq!(v, (phase as u64 + 1) * size);
+            }
+        }
+    }
+}
