@@ -1,5 +1,6 @@
 //! Solver benchmarks (`cargo bench`): step time by size, beside a peer XPBD
-//! solver on the same grid; threads; cost per family; telemetry cost.
+//! solver on the same grid; threads; the shipped presets; cost per family;
+//! telemetry cost.
 //!
 //! Every "step" here is one solver step of Δt = 1/60 s with one substep and
 //! 10 adjust iterations, a vertical sheet pinned at its two top corners,
@@ -126,6 +127,23 @@ fn threads(c: &mut Criterion) {
     g.finish();
 }
 
+/// Every shipped preset as it ships, one frame (1/60 s) per iteration,
+/// stepped from 2 s into its run, without telemetry: the solver's share of
+/// `weft record`'s steps per second (real time is 60 frames a second).
+fn presets(c: &mut Criterion) {
+    let mut g = c.benchmark_group("preset frame");
+    g.sample_size(30);
+    for shipped in weft::scene::shipped::ALL {
+        let loaded = load::load(shipped.name, &[]).unwrap();
+        let mut scene = Scene::new(&loaded.preset).unwrap();
+        for _ in 0..120 {
+            scene.step().unwrap();
+        }
+        g.bench_function(shipped.name, |b| b.iter(|| scene.step().unwrap()));
+    }
+    g.finish();
+}
+
 fn per_family(c: &mut Criterion) {
     let mut g = c.benchmark_group("family 64x64");
     g.sample_size(20);
@@ -195,6 +213,6 @@ criterion_group! {
     config = Criterion::default()
         .warm_up_time(std::time::Duration::from_secs(1))
         .measurement_time(std::time::Duration::from_secs(3));
-    targets = step_by_size, threads, per_family, telemetry
+    targets = step_by_size, threads, presets, per_family, telemetry
 }
 criterion_main!(benches);

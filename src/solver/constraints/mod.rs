@@ -220,7 +220,7 @@ pub(crate) fn project_batches<T, M, R>(
     R: Recorder,
 {
     assert_eq!(items.len(), mu.len());
-    for range in batches {
+    for range in batches.iter().filter(|b| !b.is_empty()) {
         let mine = crew.share(range.len());
         let start = range.start + mine.start;
         for (k, &item) in items[start..range.start + mine.end].iter().enumerate() {
@@ -285,10 +285,6 @@ pub(crate) fn atan2(y: f32, x: f32) -> f32 {
 #[inline]
 pub(crate) fn atan(t: f32) -> f32 {
     let a = t.abs();
-    if a < 0.05 {
-        let t2 = t * t;
-        return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 * (1.0 / 7.0))));
-    }
     if a > 1.0 {
         return atan_steep(a).copysign(t);
     }
