@@ -285,6 +285,10 @@ pub(crate) fn atan2(y: f32, x: f32) -> f32 {
 #[inline]
 pub(crate) fn atan(t: f32) -> f32 {
     let a = t.abs();
+    if a < 0.05 {
+        let t2 = t * t;
+        return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 * (1.0 / 7.0))));
+    }
     if a > 1.0 {
         return atan_steep(a).copysign(t);
     }
