@@ -18,7 +18,8 @@
 use std::time::{Duration, Instant};
 
 use super::collision::{self, Collider, Contact, Pose};
-use super::constraints::{Recorder, Shared};
+use super::constraints::{NoRecord, Recorder, Shared};
+use super::diagnostics::{Diagnostics, FamilyRecorder};
 use super::family::{PerFamily, SWEEP, SharedMultipliers, Sweep};
 use super::team::{self, Crew};
 
@@ -47,16 +48,43 @@ pub(crate) struct Colliders<'a> {
 
 /// Wall time of each part of the phase, as thread 0 saw it.
 #[derive(Debug, Default)]
-pub(crate) struct Times {
-    pub families: PerFamily<Duration>,
-    pub collisions: Duration,
+struct Times {
+    families: PerFamily<Duration>,
+    collisions: Duration,
 }
 
 impl Adjust<'_> {
+    /// Runs the phase on up to `threads` threads, with `diagnostics` when
+    /// they are on: every family's time and the colliders', and each
+    /// particle's corrections if they are asked for.
+    pub(crate) fn run(&self, threads: usize, diagnostics: Option<&mut Diagnostics>) {
+        let Some(d) = diagnostics else {
+            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), false);
+            return;
+        };
+        let times = if d.corrections {
+            let mut recs = {
+                let mut fds = d.families.iter_mut();
+                PerFamily::from_fn(|_| FamilyRecorder::new(fds.next().expect("one per family")))
+            };
+            let times = self.run_recorded(threads, &mut recs, true);
+            for (fd, rec) in d.families.iter_mut().zip(recs) {
+                fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
+            }
+            times
+        } else {
+            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), true)
+        };
+        for (fd, t) in d.families.iter_mut().zip(times.families) {
+            fd.time += t;
+        }
+        d.timings.collisions += times.collisions;
+    }
+
     /// Runs the phase on up to `threads` threads. Each thread records into a
     /// fork of `recorders` (one per family), which are joined back; with
     /// `timed`, thread 0 returns the [`Times`].
-    pub(crate) fn run<R: Recorder>(
+    fn run_recorded<R: Recorder>(
         &self,
         threads: usize,
         recorders: &mut PerFamily<R>,

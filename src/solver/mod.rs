@@ -66,8 +66,7 @@ use glam::Vec3;
 
 use adjust::{Adjust, Colliders};
 use collision::Contact;
-use constraints::{NoRecord, Particles, Shared, stretch};
-use diagnostics::FamilyRecorder;
+use constraints::{Particles, Shared, stretch};
 use family::{Compliance, Multipliers, Sweep};
 use update::{FREE, Reference};
 
@@ -556,30 +555,7 @@ impl Solver {
                 contacts: Shared::new(&mut self.contacts),
             }),
         };
-        match self.diagnostics.as_deref_mut() {
-            None => {
-                adjust.run(threads, &mut PerFamily::splat(NoRecord), false);
-            }
-            Some(d) => {
-                let times = if d.corrections {
-                    let mut fds = d.families.iter_mut();
-                    let mut recs =
-                        PerFamily::from_fn(|_| FamilyRecorder::new(fds.next().expect("a family")));
-                    drop(fds);
-                    let times = adjust.run(threads, &mut recs, true);
-                    for (fd, rec) in d.families.iter_mut().zip(recs) {
-                        fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
-                    }
-                    times
-                } else {
-                    adjust.run(threads, &mut PerFamily::splat(NoRecord), true)
-                };
-                for (fd, t) in d.families.iter_mut().zip(times.families) {
-                    fd.time += t;
-                }
-                d.timings.collisions += times.collisions;
-            }
-        }
+        adjust.run(threads, self.diagnostics.as_deref_mut());
         let margin = 0.5 * self.spec.thickness;
         if !self.colliders.is_empty() {
             collision::apply_friction(
