@@ -635,10 +635,13 @@ impl Solver {
     }
 }
 
-/// Particles below which the adjust phase runs on one thread: on smaller
-/// cloths a barrier costs about as much as a colour batch (measured in
-/// BENCHMARKS.md: 2 threads lose on 256 and 280 particles, gain from 384).
-const PARALLEL_MIN_PARTICLES: usize = 320;
+/// Particles below which the adjust phase runs on one thread. On the
+/// shipped presets (256 to 1024 particles, one or two sweeps a substep) two
+/// threads measured from 8 % faster to several times slower from run to run
+/// on a 2-core virtual machine: with a barrier every few microseconds, a
+/// thread the host pauses stalls its partner. From 64 × 64 up the gain held
+/// in every run (BENCHMARKS.md).
+const PARALLEL_MIN_PARTICLES: usize = 2048;
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);
