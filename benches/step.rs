@@ -1,6 +1,6 @@
 //! Solver benchmarks (`cargo bench`): step time by size, beside a peer XPBD
 //! solver on the same grid; threads; the shipped presets; cost per family;
-//! telemetry cost.
+//! self-collision on and off; telemetry cost.
 //!
 //! Every "step" here is one solver step of Δt = 1/60 s with one substep and
 //! 10 adjust iterations, a vertical sheet pinned at its two top corners,
@@ -156,6 +156,42 @@ fn per_family(c: &mut Criterion) {
     g.finish();
 }
 
+/// Self-collision's cost at 64 × 64, on and off: on the benchmark sheet
+/// (hanging, no contacts: the contact search alone), and on `folding_sheet`
+/// at 64 × 64 (4 substeps × 2 sweeps) from the moment its fold is laid down,
+/// with contacts in every substep.
+fn self_collision(c: &mut Criterion) {
+    let mut g = c.benchmark_group("self-collision 64x64");
+    g.sample_size(20);
+    for (name, weight) in [("sheet off", 0.0), ("sheet on", 1.0)] {
+        let weights = Weights::default_weights().with(Family::SelfCollision, weight);
+        let mut s = weft_sheet(64, weights);
+        g.bench_function(name, |b| {
+            b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
+        });
+    }
+    let sets: Vec<load::Override> = ["cloth.weft=64", "cloth.warp=64"]
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let folded = {
+        let preset = load::load("folding_sheet", &sets).unwrap().preset;
+        let mut scene = Scene::new(&preset).unwrap();
+        for _ in 0..scene.frames_in(4.6) {
+            scene.step().unwrap();
+        }
+        scene
+    };
+    for (name, weight) in [("fold off", 0.0), ("fold on", 1.0)] {
+        let mut scene = folded.clone();
+        let mut params = *scene.solver().params();
+        params.weights[Family::SelfCollision] = weight;
+        scene.set_params(params).unwrap();
+        g.bench_function(name, |b| b.iter(|| scene.step().unwrap()));
+    }
+    g.finish();
+}
+
 fn telemetry(c: &mut Criterion) {
     let mut g = c.benchmark_group("telemetry 64x64");
     g.sample_size(20);
@@ -213,6 +249,6 @@ criterion_group! {
     config = Criterion::default()
         .warm_up_time(std::time::Duration::from_secs(1))
         .measurement_time(std::time::Duration::from_secs(3));
-    targets = step_by_size, threads, presets, per_family, telemetry
+    targets = step_by_size, threads, presets, per_family, self_collision, telemetry
 }
 criterion_main!(benches);

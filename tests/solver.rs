@@ -133,7 +133,9 @@ proptest! {
 
     #[test]
     fn each_family_alone_reduces_its_violation(seed in 1u64..u64::MAX, amp in 0.002f32..0.01) {
-        for family in Family::ALL {
+        // Self-collision has nothing to do on a single perturbed layer; its
+        // own monotone test folds a sheet (tests/self_collision.rs).
+        for family in Family::ALL.into_iter().filter(|&f| f != Family::SelfCollision) {
             let mut s = Solver::new(spec(10), only(family), &[]).unwrap();
             perturb(&mut s, seed, amp, amp * 8.0);
             let mut last = s.violation(family).rms;

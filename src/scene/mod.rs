@@ -116,13 +116,22 @@ impl Scene {
 
     /// Advances one frame (`Δt`).
     pub fn step(&mut self) -> Result<(), StepError> {
+        self.step_with(&mut |_| {})
+    }
+
+    /// [`Scene::step`], calling `after_substep` with the cloth at the end of
+    /// every substep.
+    pub fn step_with(
+        &mut self,
+        after_substep: &mut dyn FnMut(&crate::solver::ClothState),
+    ) -> Result<(), StepError> {
         let t0 = self.solver.time() as f32;
         let t1 = t0 + self.solver.params().dt;
         for (pose, m) in self.poses.iter_mut().zip(&mut self.motions) {
             *pose = m.pose(t1);
         }
         let env = self.environment_at(t0);
-        self.solver.step(&env, &self.poses)?;
+        self.solver.step_with(&env, &self.poses, after_substep)?;
         self.frame += 1;
         Ok(())
     }

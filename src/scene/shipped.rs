@@ -27,6 +27,8 @@ shipped!(
     "hanging_sheet",
     "sphere_drape",
     "stress_jerk",
+    "folding_sheet",
+    "furling_banner",
 );
 
 /// The shipped preset called `name`.

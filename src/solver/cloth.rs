@@ -24,6 +24,9 @@ pub const MAX_RESOLUTION: u32 = 512;
 /// The default [`ClothSpec::imperfection`]: a tenth of a millimetre.
 pub const DEFAULT_IMPERFECTION: f32 = 1e-4;
 
+/// The default [`ClothSpec::friction`] of cloth on cloth.
+pub const DEFAULT_FRICTION: f32 = 0.3;
+
 /// What a cloth is made of and how it is laid out at rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClothSpec {
@@ -37,8 +40,12 @@ pub struct ClothSpec {
     pub warp: u32,
     /// Areal density `ρ_A`, in kg/m².
     pub density: f32,
-    /// Thickness of the cloth, in metres; colliders keep particles half of it away.
+    /// Thickness of the cloth, in metres; colliders keep particles half of it
+    /// away, and self-collision keeps the cloth's layers all of it apart.
     pub thickness: f32,
+    /// Coulomb friction coefficient `μ ≥ 0` of the cloth on itself, where
+    /// self-collision presses two layers together.
+    pub friction: f32,
     /// How far, at most, each particle of the rest layout sits off the flat
     /// plane along the normal, in metres: a fixed, seeded pattern (the same
     /// for every run) standing for the unevenness of real cloth. A perfectly
@@ -61,6 +68,7 @@ impl Default for ClothSpec {
             warp: 32,
             density: 0.2,
             thickness: 0.004,
+            friction: DEFAULT_FRICTION,
             imperfection: DEFAULT_IMPERFECTION,
             origin: Vec3::ZERO,
             rotation: Quat::IDENTITY,
@@ -83,6 +91,9 @@ impl ClothSpec {
         Range::new(0.0, 0.1)
             .unit(" m")
             .check("cloth.thickness", self.thickness)?;
+        Range::new(0.0, 10.0)
+            .of("μ")
+            .check("cloth.friction", self.friction)?;
         let imperfection = Range::new(0.0, 0.01).unit(" m");
         imperfection.check("cloth.imperfection", self.imperfection)?;
         Range::components(1e6).check_each("cloth.origin", &self.origin.to_array())?;

@@ -89,6 +89,10 @@ pub struct Diagnostics {
     pub max_strain: f32,
     /// Kinetic energy of the free particles, in joules.
     pub kinetic_energy: f32,
+    /// Edges of the cloth's mesh that cross a triangle (see
+    /// [`Solver::self_crossings`](super::Solver::self_crossings)), while
+    /// self-collision is on.
+    pub self_crossings: Option<usize>,
     /// Wall times.
     pub timings: Timings,
 }

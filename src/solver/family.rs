@@ -21,7 +21,8 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use super::cloth::ClothState;
+use super::cloth::{ClothSpec, ClothState};
+use super::constraints::self_collision::{self, SelfContact};
 use super::constraints::{
     Particles, Recorder, Shared, curvature, normality, planarity, project_batches, stretch,
 };
@@ -42,11 +43,13 @@ pub enum Family {
     Normality,
     /// Co-circularity of bend pairs.
     Curvature,
+    /// Cloth–cloth contact: the layers stay the thickness apart.
+    SelfCollision,
 }
 
 impl Family {
     /// How many families there are.
-    pub const COUNT: usize = 4;
+    pub const COUNT: usize = 5;
 
     /// All families, in the order reports list them (the order the adjust
     /// phase projects them, see [`SWEEP`]).
@@ -55,6 +58,7 @@ impl Family {
         Family::Normality,
         Family::Curvature,
         Family::Stretch,
+        Family::SelfCollision,
     ];
 
     /// A stable index, `0..COUNT`, for per-family arrays.
@@ -69,6 +73,7 @@ impl Family {
             Family::Planarity => "planarity",
             Family::Normality => "normality",
             Family::Curvature => "curvature",
+            Family::SelfCollision => "self",
         }
     }
 
@@ -79,6 +84,7 @@ impl Family {
             Family::Planarity => 0.5,
             Family::Normality => 0.2,
             Family::Curvature => 0.1,
+            Family::SelfCollision => 0.0,
         }
     }
 
@@ -94,11 +100,12 @@ impl Family {
         Family::Planarity,
         Family::Normality,
         Family::Curvature,
+        Family::SelfCollision,
     ];
 
     /// Every family's name, in [`Family::index`] order (for "did you mean").
     pub const NAMES: [&'static str; Self::COUNT] =
-        ["stretch", "planarity", "normality", "curvature"];
+        ["stretch", "planarity", "normality", "curvature", "self"];
 }
 
 /// How many times one adjust sweep projects the length limit.
@@ -111,14 +118,16 @@ impl Family {
 pub const STRETCH_PASSES: usize = 3;
 
 /// The order of one adjust sweep: the surface families, then the length
-/// limit [`STRETCH_PASSES`] times, so it has the last word. (Running the stretch passes' colours
-/// in alternating orders, symmetric Gauss–Seidel, was measured and raised
-/// peak strain on every preset.)
-pub const SWEEP: [Family; 3 + STRETCH_PASSES] = {
-    let mut sweep = [Family::Stretch; 3 + STRETCH_PASSES];
+/// limit [`STRETCH_PASSES`] times, then self-collision, so that the layers
+/// are apart when the colliders take over. (Running the stretch passes'
+/// colours in alternating orders, symmetric Gauss–Seidel, was measured and
+/// raised peak strain on every preset.)
+pub const SWEEP: [Family; 4 + STRETCH_PASSES] = {
+    let mut sweep = [Family::Stretch; 4 + STRETCH_PASSES];
     sweep[0] = Family::Planarity;
     sweep[1] = Family::Normality;
     sweep[2] = Family::Curvature;
+    sweep[3 + STRETCH_PASSES] = Family::SelfCollision;
     sweep
 };
 
@@ -291,6 +300,7 @@ pub(crate) struct Compliance {
     planarity: f32,
     normality: f32,
     curvature: f32,
+    self_contact: f32,
 }
 
 impl Compliance {
@@ -303,6 +313,7 @@ impl Compliance {
             planarity: of(r.planarity, Family::Planarity),
             normality: of(r.normality, Family::Normality),
             curvature: of(r.curvature, Family::Curvature),
+            self_contact: of(r.self_contact, Family::SelfCollision),
         }
     }
 }
@@ -317,12 +328,13 @@ pub(crate) struct Multipliers {
     normality: Vec<f32>,
     planarity: Vec<[f32; 2]>,
     curvature: Vec<[f32; 2]>,
+    pub(crate) self_contact: Vec<f32>,
 }
 
 impl Multipliers {
-    /// All zero, sized for `topology` and `tethers` tethers: each substep
-    /// starts from no accumulated correction.
-    pub(crate) fn reset(&mut self, topology: &Topology, tethers: usize) {
+    /// All zero, sized for `topology`, `tethers` tethers and `contacts`
+    /// self-contacts: each substep starts from no accumulated correction.
+    pub(crate) fn reset(&mut self, topology: &Topology, tethers: usize, contacts: usize) {
         let zero = |v: &mut Vec<f32>, n: usize| {
             v.clear();
             v.resize(n, 0.0);
@@ -337,6 +349,7 @@ impl Multipliers {
         zero(&mut self.normality, topology.structural.len());
         zero2(&mut self.planarity, topology.structural.len());
         zero2(&mut self.curvature, topology.bend.len());
+        zero(&mut self.self_contact, contacts);
     }
 
     /// The multipliers as the threads of the adjust phase share them.
@@ -348,6 +361,7 @@ impl Multipliers {
             normality: Shared::new(&mut self.normality),
             planarity: Shared::new(&mut self.planarity),
             curvature: Shared::new(&mut self.curvature),
+            self_contact: Shared::new(&mut self.self_contact),
         }
     }
 }
@@ -361,6 +375,7 @@ pub(crate) struct SharedMultipliers<'a> {
     normality: Shared<'a, f32>,
     planarity: Shared<'a, [f32; 2]>,
     curvature: Shared<'a, [f32; 2]>,
+    self_contact: Shared<'a, f32>,
 }
 
 /// What every family's projection in one sweep reads: the constraints, the
@@ -368,6 +383,9 @@ pub(crate) struct SharedMultipliers<'a> {
 pub(crate) struct Sweep<'a> {
     pub topology: &'a Topology,
     pub tethers: &'a stretch::Tethers,
+    /// This substep's self-contacts, and the distance they keep.
+    pub contacts: &'a Batched<SelfContact>,
+    pub thickness: f32,
     pub p: &'a Particles<'a>,
     pub k: &'a Compliance,
     pub rot: &'a ForcedRotation,
@@ -386,6 +404,8 @@ impl Sweep<'_> {
         let Self {
             topology,
             tethers,
+            contacts,
+            thickness,
             p,
             k,
             rot,
@@ -449,6 +469,16 @@ impl Sweep<'_> {
                     |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
                 );
             }
+            Family::SelfCollision => {
+                project_batches(
+                    crew,
+                    &contacts.items,
+                    &mu.self_contact,
+                    &contacts.batches,
+                    rec,
+                    |c, m, r| self_collision::project(p, c, m, thickness, k.self_contact, r),
+                );
+            }
         }
     }
 }
@@ -457,8 +487,14 @@ fn stats<T: Copy>(sets: &[&Batched<T>], f: impl Fn(T) -> f32) -> Violation {
     Violation::of(sets.iter().flat_map(|s| s.items.iter()).map(|&p| f(p)))
 }
 
-/// The violation of one family over the constraints it projects.
-pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Violation {
+/// The violation of one family over the constraints it projects (for
+/// self-collision: the penetration of the pairs closer than the thickness).
+pub fn violation(
+    family: Family,
+    state: &ClothState,
+    topology: &Topology,
+    spec: &ClothSpec,
+) -> Violation {
     let x = &state.position;
     let normal = |i| state.normal(i);
     match family {
@@ -468,13 +504,23 @@ pub fn violation(family: Family, state: &ClothState, topology: &Topology) -> Vio
         }),
         Family::Normality => stats(&[&topology.structural], |p| normality::violation(normal, p)),
         Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
+        Family::SelfCollision => {
+            let mut depths = Vec::new();
+            self_collision::for_each_close(x, &topology.triangles, spec, |_, _, d| depths.push(d));
+            Violation::of(depths.into_iter())
+        }
     }
 }
 
 /// Per particle, the largest violation of `family` over the constraints
 /// that involve it (pairs: both ends; bend triples: all three), as in
 /// [`violation`]. For inspecting one particle.
-pub fn particle_violation(family: Family, state: &ClothState, topology: &Topology) -> Vec<f32> {
+pub fn particle_violation(
+    family: Family,
+    state: &ClothState,
+    topology: &Topology,
+    spec: &ClothSpec,
+) -> Vec<f32> {
     let x = &state.position;
     let normal = |i| state.normal(i);
     let mut out = vec![0.0f32; state.len()];
@@ -502,6 +548,13 @@ pub fn particle_violation(family: Family, state: &ClothState, topology: &Topolog
                 put(t.mid, v);
                 put(t.b, v);
             }
+        }
+        Family::SelfCollision => {
+            self_collision::for_each_close(x, &topology.triangles, spec, |p, tri, d| {
+                for i in [p, tri[0], tri[1], tri[2]] {
+                    put(i, d);
+                }
+            });
         }
     }
     out

@@ -38,6 +38,7 @@
 //! ```
 
 mod adjust;
+mod broad_phase;
 pub mod cloth;
 pub mod collision;
 pub mod constraints;
@@ -66,6 +67,7 @@ use glam::Vec3;
 
 use adjust::{Adjust, Colliders};
 use collision::Contact;
+use constraints::self_collision::{self, Layers, SelfContacts};
 use constraints::{Particles, Shared, stretch};
 use family::{Compliance, Multipliers, Sweep};
 use update::{FREE, Reference};
@@ -162,6 +164,7 @@ pub struct Solver {
     /// Per particle, the body damping measures its motion against.
     reference_body: Vec<u32>,
     multipliers: Multipliers,
+    self_contacts: SelfContacts,
     rest_position: Vec<Vec3>,
     // Scratch, kept to avoid allocating per step.
     sub_from: Vec<Pose>,
@@ -196,6 +199,7 @@ impl Solver {
             tethers_stale: false,
             reference_body: vec![FREE; n],
             multipliers: Multipliers::default(),
+            self_contacts: SelfContacts::default(),
             rest_position: (0..spec.warp)
                 .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))
                 .collect(),
@@ -406,18 +410,24 @@ impl Solver {
 
     /// The current violation of one family.
     pub fn violation(&self, family: Family) -> Violation {
-        family::violation(family, &self.state, &self.topology)
+        family::violation(family, &self.state, &self.topology, &self.spec)
     }
 
     /// Per particle, the largest violation of `family` among the
     /// constraints that involve it.
     pub fn particle_violation(&self, family: Family) -> Vec<f32> {
-        family::particle_violation(family, &self.state, &self.topology)
+        family::particle_violation(family, &self.state, &self.topology, &self.spec)
     }
 
     /// Per particle, the largest strain of its weft and warp edges.
     pub fn particle_strain(&self) -> Vec<f32> {
         diagnostics::particle_strain(&self.state, &self.topology)
+    }
+
+    /// How many edges of the cloth's mesh cross a triangle they share no
+    /// particle with: 0 while the cloth does not pass through itself.
+    pub fn self_crossings(&self) -> usize {
+        self_collision::crossings(&self.state.position, &self.topology.triangles, &self.spec)
     }
 
     /// The largest strain of a weft or warp edge.
@@ -434,6 +444,17 @@ impl Solver {
     ///
     /// On error the state is left as it was before the step.
     pub fn step(&mut self, env: &Environment, bodies: &[Pose]) -> Result<(), StepError> {
+        self.step_with(env, bodies, &mut |_| {})
+    }
+
+    /// [`Solver::step`], calling `after_substep` with the state at the end of
+    /// every substep (for checks that must hold at each, as in the tests).
+    pub fn step_with(
+        &mut self,
+        env: &Environment,
+        bodies: &[Pose],
+        after_substep: &mut dyn FnMut(&ClothState),
+    ) -> Result<(), StepError> {
         let step = self.steps + 1;
         if bodies.len() != self.bodies.len() {
             return Err(StepError::Bodies {
@@ -474,13 +495,19 @@ impl Solver {
                     value,
                 });
             }
+            after_substep(&self.state);
         }
         self.bodies.copy_from_slice(bodies);
         self.time += self.params.dt as f64;
         self.steps = step;
-        if let Some(d) = self.diagnostics.as_deref_mut() {
+        if self.diagnostics.is_some() {
+            let crossings =
+                (self.params.weights[Family::SelfCollision] > 0.0).then(|| self.self_crossings());
+            let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
+            d.self_crossings = crossings;
             for f in Family::ALL {
-                d.families[f].violation = family::violation(f, &self.state, &self.topology);
+                d.families[f].violation =
+                    family::violation(f, &self.state, &self.topology, &self.spec);
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
             d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);
@@ -527,8 +554,17 @@ impl Solver {
             self.collider_to.push(c.world_pose(&self.sub_to));
         }
         self.contacts.fill(Contact::default());
-        self.multipliers
-            .reset(&self.topology, self.tethers.items.len());
+        let self_collision = self.params.weights[Family::SelfCollision] > 0.0;
+        if self_collision {
+            self.find_self_contacts();
+        } else {
+            self.self_contacts.set = Default::default();
+        }
+        self.multipliers.reset(
+            &self.topology,
+            self.tethers.items.len(),
+            self.self_contacts.set.len(),
+        );
         let compliance = Compliance::new(&self.params.weights, dt);
         let threads = self.threads();
         let p = Particles::new(
@@ -541,6 +577,8 @@ impl Solver {
             sweep: Sweep {
                 topology: &self.topology,
                 tethers: &self.tethers,
+                contacts: &self.self_contacts.set,
+                thickness: self.spec.thickness,
                 p: &p,
                 k: &compliance,
                 rot,
@@ -556,6 +594,16 @@ impl Solver {
             }),
         };
         adjust.run(threads, self.diagnostics.as_deref_mut());
+        if !self.self_contacts.set.is_empty() {
+            self_collision::apply_friction(
+                &mut self.state.position,
+                &self.state.prev_position,
+                &self.inv_mass,
+                &self.self_contacts.set.items,
+                &self.multipliers.self_contact,
+                self.spec.friction,
+            );
+        }
         let margin = 0.5 * self.spec.thickness;
         if !self.colliders.is_empty() {
             collision::apply_friction(
@@ -575,6 +623,26 @@ impl Solver {
             *q = q.normalize();
         }
         self.check_finite("adjust")
+    }
+
+    /// Finds this substep's self-contacts over the predicted positions (timed
+    /// with the self-collision family in diagnostics).
+    fn find_self_contacts(&mut self) {
+        let t = self.diagnostics.is_some().then(Instant::now);
+        let (dx, dy) = self.spec.spacing();
+        self.self_contacts.build(
+            &Layers {
+                now: &self.state.position,
+                start: &self.state.prev_position,
+                inv_mass: &self.inv_mass,
+            },
+            &self.topology.triangles,
+            &self.spec,
+            self.spec.thickness + SELF_CONTACT_SLACK * dx.min(dy),
+        );
+        if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
+            d.families[Family::SelfCollision].time += t.elapsed();
+        }
     }
 
     /// How many threads the adjust phase may use: one for a cloth too small
@@ -642,6 +710,12 @@ impl Solver {
 /// thread the host pauses stalls its partner. From 64 × 64 up the gain held
 /// in every run (BENCHMARKS.md).
 const PARALLEL_MIN_PARTICLES: usize = 2048;
+
+/// How much farther than the thickness, in rest spacings, a particle and a
+/// triangle may be at the predicted positions to be a self-contact of the
+/// substep: room for the adjust phase's own corrections to bring them
+/// together.
+const SELF_CONTACT_SLACK: f32 = 0.25;
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);

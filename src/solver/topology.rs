@@ -90,38 +90,53 @@ pub type TripleSet = Batched<Triple>;
 impl<T: Touches + Copy> Batched<T> {
     /// Colours `items` greedily (first colour used by none of its particles)
     /// and sorts them by colour, keeping the original order within a colour.
+    /// A grid's sets need at most 6 colours; contacts in a heap of folds may
+    /// need more than the 64 of one round, and the rest are coloured in
+    /// further rounds, each after the last.
     pub fn coloured(items: Vec<T>, particles: usize) -> Self {
-        // A bit mask of colours already used at each particle. Grids need at
-        // most 6 colours per set; 64 is far more than any set here can need.
+        let mut out = Self {
+            items: Vec::with_capacity(items.len()),
+            batches: Vec::new(),
+        };
+        // A bit mask of the colours already used at each particle.
         let mut used = vec![0u64; particles];
-        let mut colour_of = Vec::with_capacity(items.len());
-        for item in &items {
-            let taken = item.particles().fold(0, |m, i| m | used[i as usize]);
-            let c = (!taken).trailing_zeros();
-            assert!(c < 64, "constraint graph needs more than 64 colours");
-            for i in item.particles() {
-                used[i as usize] |= 1 << c;
+        let mut left = items;
+        while !left.is_empty() {
+            used.fill(0);
+            let mut colour_of = Vec::with_capacity(left.len());
+            for item in &left {
+                let taken = item.particles().fold(0, |m, i| m | used[i as usize]);
+                let c = (!taken).trailing_zeros();
+                if c < 64 {
+                    for i in item.particles() {
+                        used[i as usize] |= 1 << c;
+                    }
+                }
+                colour_of.push(c as usize);
             }
-            colour_of.push(c as usize);
+            let colours = colour_of
+                .iter()
+                .filter(|&&c| c < 64)
+                .max()
+                .map_or(0, |c| c + 1);
+            for c in 0..colours {
+                let start = out.items.len();
+                out.items.extend(
+                    left.iter()
+                        .zip(&colour_of)
+                        .filter(|(_, k)| **k == c)
+                        .map(|(p, _)| *p),
+                );
+                out.batches.push(start..out.items.len());
+            }
+            left = left
+                .into_iter()
+                .zip(colour_of)
+                .filter(|(_, k)| *k >= 64)
+                .map(|(p, _)| p)
+                .collect();
         }
-        let colours = colour_of.iter().max().map_or(0, |c| c + 1);
-        let mut sorted = Vec::with_capacity(items.len());
-        let mut batches = Vec::with_capacity(colours);
-        for c in 0..colours {
-            let start = sorted.len();
-            sorted.extend(
-                items
-                    .iter()
-                    .zip(&colour_of)
-                    .filter(|(_, k)| **k == c)
-                    .map(|(p, _)| *p),
-            );
-            batches.push(start..sorted.len());
-        }
-        Self {
-            items: sorted,
-            batches,
-        }
+        out
     }
 
     /// Number of constraints.

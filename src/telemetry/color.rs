@@ -13,6 +13,7 @@ pub fn family(f: Family) -> Color {
         Family::Planarity => Color::from_rgb(70, 170, 230),
         Family::Normality => Color::from_rgb(120, 200, 90),
         Family::Curvature => Color::from_rgb(230, 170, 50),
+        Family::SelfCollision => Color::from_rgb(200, 90, 220),
     }
 }
 
@@ -65,7 +66,8 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
         | ColorBy::CorrectionStretch
         | ColorBy::CorrectionPlanarity
         | ColorBy::CorrectionNormality
-        | ColorBy::CorrectionCurvature => match solver.diagnostics() {
+        | ColorBy::CorrectionCurvature
+        | ColorBy::CorrectionSelf => match solver.diagnostics() {
             None => vec![Color::from_rgb(220, 200, 160); n],
             Some(d) => (0..n)
                 .map(|i| {

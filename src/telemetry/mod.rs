@@ -17,6 +17,7 @@
 //! | `world/bodies/{name}` | body transform; its colliders below it | full |
 //! | `world/colliders/{k}` | fixed colliders | static |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
+//! | `metrics/violation/self/crossings` | mesh edges through a triangle (0 when the cloth does not pass through itself), while self-collision is on | summary |
 //! | `metrics/strain/max`, `metrics/energy/kinetic` | strain, energy | summary |
 //! | `metrics/time/…` | update, adjust per family, collisions, telemetry, total (ms) | summary |
 //! | `params` | solver parameters (TOML), at every change | always |
@@ -358,6 +359,9 @@ impl Telemetry {
                     paths::adjust_time(f),
                     &rerun::Scalars::single(ms(d.family(f).time)),
                 )?;
+            }
+            if let Some(n) = d.self_crossings {
+                rec.log(paths::SELF_CROSSINGS, &rerun::Scalars::single(n as f64))?;
             }
             rec.log(paths::STRAIN, &rerun::Scalars::single(d.max_strain as f64))?;
             rec.log(

@@ -29,6 +29,8 @@ pub const VERSION: &str = "weft";
 pub const SUMMARY: &str = "summary";
 /// Largest edge strain.
 pub const STRAIN: &str = "metrics/strain/max";
+/// How many edges of the mesh cross a triangle (self-collision's second measure).
+pub const SELF_CROSSINGS: &str = "metrics/violation/self/crossings";
 /// Kinetic energy.
 pub const ENERGY: &str = "metrics/energy/kinetic";
 /// Update phase wall time.

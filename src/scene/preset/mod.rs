@@ -95,8 +95,10 @@ pub struct ClothSection {
     pub warp: u32,
     /// Areal density, in kg/m².
     pub density: f32,
-    /// Thickness, in metres.
+    /// Thickness, in metres: colliders keep half of it, self-collision all of it.
     pub thickness: f32,
+    /// Friction coefficient of the cloth on itself.
+    pub friction: f32,
     /// Largest seeded deviation of the rest layout from flat, in metres
     /// (see [`ClothSpec::imperfection`]).
     pub imperfection: f32,
@@ -117,6 +119,7 @@ impl Default for ClothSection {
             warp: d.warp,
             density: d.density,
             thickness: d.thickness,
+            friction: d.friction,
             imperfection: d.imperfection,
             position: Vec3::ZERO,
             rotation: [0.0; 3],
@@ -134,6 +137,7 @@ impl ClothSection {
             warp: self.warp,
             density: self.density,
             thickness: self.thickness,
+            friction: self.friction,
             imperfection: self.imperfection,
             origin: self.position,
             rotation: euler(self.rotation),

@@ -39,13 +39,16 @@ pub enum ColorBy {
     /// Size of the curvature family's correction alone.
     #[serde(rename = "correction.curvature")]
     CorrectionCurvature,
+    /// Size of the self-collision family's correction alone.
+    #[serde(rename = "correction.self")]
+    CorrectionSelf,
     /// One colour.
     None,
 }
 
 impl ColorBy {
     /// Every choice, in menu order.
-    pub const ALL: [ColorBy; 8] = [
+    pub const ALL: [ColorBy; 9] = [
         ColorBy::Strain,
         ColorBy::Speed,
         ColorBy::Correction,
@@ -53,6 +56,7 @@ impl ColorBy {
         ColorBy::CorrectionPlanarity,
         ColorBy::CorrectionNormality,
         ColorBy::CorrectionCurvature,
+        ColorBy::CorrectionSelf,
         ColorBy::None,
     ];
 
@@ -66,6 +70,7 @@ impl ColorBy {
             ColorBy::CorrectionPlanarity => "correction.planarity",
             ColorBy::CorrectionNormality => "correction.normality",
             ColorBy::CorrectionCurvature => "correction.curvature",
+            ColorBy::CorrectionSelf => "correction.self",
             ColorBy::None => "none",
         }
     }
@@ -78,6 +83,7 @@ impl ColorBy {
             ColorBy::CorrectionPlanarity => Some(Family::Planarity),
             ColorBy::CorrectionNormality => Some(Family::Normality),
             ColorBy::CorrectionCurvature => Some(Family::Curvature),
+            ColorBy::CorrectionSelf => Some(Family::SelfCollision),
             _ => None,
         }
     }

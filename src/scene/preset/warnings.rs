@@ -4,6 +4,14 @@
 //! them to standard error.
 
 use super::Preset;
+use crate::solver::Family;
+
+/// Self-collision keeps layers a thickness apart: over half the grid's
+/// spacing it reaches particles only three grid steps away, which it does
+/// not exclude as neighbours.
+const MAX_THICKNESS_PER_SPACING: f32 = 0.5;
+/// Under 1 % of the spacing the layers lie within rounding of each other.
+const MIN_THICKNESS_PER_SPACING: f32 = 0.01;
 
 /// Rough cost of one particle through one substep's update, or through one
 /// sweep of every family, in seconds: measured at 512 × 512 (`weft record
@@ -16,17 +24,53 @@ const SLOW_FRAME: f64 = 0.5;
 
 impl Preset {
     /// What is valid but probably not meant: a grid so large that each frame
-    /// takes seconds, with an estimate of the cost.
+    /// takes seconds, with an estimate of the cost; a thickness that
+    /// self-collision cannot keep at the grid's spacing, with one it can.
     pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        out.extend(self.slow_frame());
+        out.extend(self.unfit_thickness());
+        out
+    }
+
+    /// A thickness self-collision cannot keep at this grid's spacing.
+    fn unfit_thickness(&self) -> Option<String> {
+        let c = &self.cloth;
+        if self.solver.weights[Family::SelfCollision] == 0.0 {
+            return None;
+        }
+        let spacing = self.cloth.spec().spacing();
+        let spacing = spacing.0.min(spacing.1);
+        let (lo, hi) = (
+            MIN_THICKNESS_PER_SPACING * spacing,
+            MAX_THICKNESS_PER_SPACING * spacing,
+        );
+        if c.thickness > hi {
+            Some(format!(
+                "cloth.thickness = {} m is more than half the grid's spacing ({spacing:.4} m): self-collision then holds every fold at least that far open and pushes on particles only three grid steps apart, so the cloth folds as if stiff; use a thickness up to {hi:.4} m, or a finer grid",
+                c.thickness
+            ))
+        } else if c.thickness < lo {
+            Some(format!(
+                "cloth.thickness = {} m is under 1 % of the grid's spacing ({spacing:.4} m): self-collision would keep the layers closer than a substep's rounding can tell apart, and a particle left on the other layer's face has no side to keep; use a thickness of at least {lo:.5} m, or turn self-collision off (solver.weights.self = 0)",
+                c.thickness
+            ))
+        } else {
+            None
+        }
+    }
+
+    /// A grid so large that each frame takes seconds.
+    fn slow_frame(&self) -> Option<String> {
         let (c, s) = (&self.cloth, &self.solver);
         let particles = c.weft as f64 * c.warp as f64;
         let passes = s.substeps as f64 * (1.0 + s.iterations as f64);
         let frame = particles * passes * SECONDS_PER_PARTICLE_PASS;
         if frame < SLOW_FRAME {
-            return Vec::new();
+            return None;
         }
         let frames = (self.duration as f64 / s.dt as f64).ceil();
-        vec![format!(
+        Some(format!(
             "a {} × {} cloth ({particles} particles) with {} substeps × {} iterations is far larger than the shipped presets (at most 32 × 32): expect roughly {} per frame, the first one included, and {} for the {} s duration",
             c.weft,
             c.warp,
@@ -35,7 +79,7 @@ impl Preset {
             seconds(frame),
             seconds(frame * frames),
             self.duration,
-        )]
+        ))
     }
 }
 

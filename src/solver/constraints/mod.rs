@@ -35,6 +35,7 @@
 pub mod curvature;
 pub mod normality;
 pub mod planarity;
+pub mod self_collision;
 pub mod stretch;
 
 use std::ops::Range;

@@ -1,0 +1,335 @@
+//! Self-collision: the cloth never passes through itself, counted by an
+//! independent brute-force check of every edge against every triangle; the
+//! check catches a cloth that does (self-collision off); contacts push
+//! layers apart monotonically; results are bit-identical for any thread
+//! count; bad values are refused.
+
+use glam::{DVec3, Vec3};
+use weft::scene::load::{self, Override};
+use weft::scene::{Scene, preset::Preset};
+use weft::solver::{ClothSpec, ClothState, Environment, Family, Params, Solver, Weights};
+
+/// The triangle mesh of a `weft × warp` grid, built here from the grid
+/// alone: each cell split along its (i, j)–(i+1, j+1) diagonal.
+fn mesh(weft: u32, warp: u32) -> (Vec<[u32; 2]>, Vec<[u32; 3]>) {
+    let idx = |i: u32, j: u32| j * weft + i;
+    let (mut edges, mut triangles) = (Vec::new(), Vec::new());
+    for j in 0..warp {
+        for i in 0..weft {
+            if i + 1 < weft {
+                edges.push([idx(i, j), idx(i + 1, j)]);
+            }
+            if j + 1 < warp {
+                edges.push([idx(i, j), idx(i, j + 1)]);
+            }
+            if i + 1 < weft && j + 1 < warp {
+                edges.push([idx(i, j), idx(i + 1, j + 1)]);
+                triangles.push([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1)]);
+                triangles.push([idx(i, j), idx(i + 1, j + 1), idx(i, j + 1)]);
+            }
+        }
+    }
+    (edges, triangles)
+}
+
+/// The signed volume of the tetrahedron `(a, b, c, d)`, in `f64`.
+fn orient(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    (b - a).cross(c - a).dot(d - a)
+}
+
+/// Whether segment `u v` passes through triangle `t`: its ends on opposite
+/// sides of the plane and the point where it meets the plane inside the
+/// triangle, each by more than 1 µm (an edge that only touches a triangle,
+/// or lies in its plane, does not cross). Signed volumes and distances to
+/// the edges' lines, in `f64`: a method unlike the solver's.
+fn crosses(u: DVec3, v: DVec3, t: [DVec3; 3]) -> bool {
+    const MARGIN: f64 = 1e-6;
+    let area2 = (t[1] - t[0]).cross(t[2] - t[0]).length();
+    let (su, sv) = (orient(t[0], t[1], t[2], u), orient(t[0], t[1], t[2], v));
+    if su * sv >= 0.0 || su.abs().min(sv.abs()) <= MARGIN * area2 {
+        return false;
+    }
+    let p = u + (v - u) * (su / (su - sv));
+    let n = (t[1] - t[0]).cross(t[2] - t[0]) / area2;
+    (0..3).all(|k| {
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        (b - a).cross(p - a).dot(n) > MARGIN * (b - a).length()
+    })
+}
+
+/// Every (edge, triangle) pair sharing no particle that crosses: each edge
+/// against each triangle, with a bounding-box test first for speed.
+fn brute_force_crossings(x: &[Vec3], edges: &[[u32; 2]], triangles: &[[u32; 3]]) -> usize {
+    let p: Vec<DVec3> = x.iter().map(|v| v.as_dvec3()).collect();
+    let boxes: Vec<(DVec3, DVec3)> = triangles
+        .iter()
+        .map(|t| {
+            let c = t.map(|k| p[k as usize]);
+            (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]))
+        })
+        .collect();
+    let mut count = 0;
+    for e in edges {
+        let (u, v) = (p[e[0] as usize], p[e[1] as usize]);
+        let (lo, hi) = (u.min(v), u.max(v));
+        for (t, (tlo, thi)) in triangles.iter().zip(&boxes) {
+            if hi.cmplt(*tlo).any()
+                || lo.cmpgt(*thi).any()
+                || t.contains(&e[0])
+                || t.contains(&e[1])
+            {
+                continue;
+            }
+            if crosses(u, v, t.map(|k| p[k as usize])) {
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+fn preset(name: &str, sets: &[&str]) -> Preset {
+    let sets: Vec<Override> = sets.iter().map(|s| s.parse().unwrap()).collect();
+    load::load(name, &sets)
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .preset
+}
+
+/// Runs a preset to its end, counting crossings at the end of every
+/// substep (or of every frame); returns the largest count seen and the
+/// frame it was first seen at.
+fn worst_crossings(preset: &Preset, every_substep: bool) -> (usize, u64) {
+    let mut scene = Scene::new(preset).unwrap();
+    let (edges, triangles) = mesh(preset.cloth.weft, preset.cloth.warp);
+    let frames = scene.frames_in(preset.duration);
+    let (mut worst, mut at) = (0, 0);
+    for frame in 1..=frames {
+        let mut seen = 0;
+        let mut check = |s: &ClothState| {
+            seen = seen.max(brute_force_crossings(&s.position, &edges, &triangles));
+        };
+        if every_substep {
+            scene.step_with(&mut check).unwrap();
+        } else {
+            scene.step().unwrap();
+            check(scene.solver().state());
+        }
+        if seen > worst {
+            (worst, at) = (seen, frame);
+        }
+    }
+    (worst, at)
+}
+
+#[test]
+fn the_new_presets_never_pass_through_themselves() {
+    // Every substep, on small grids.
+    for (name, sets) in [
+        ("folding_sheet", &["cloth.weft=12", "cloth.warp=12"]),
+        ("furling_banner", &["cloth.weft=12", "cloth.warp=9"]),
+    ] {
+        let (worst, frame) = worst_crossings(&preset(name, sets), true);
+        assert_eq!(
+            worst, 0,
+            "{name} at 12 × n: {worst} crossings at frame {frame}"
+        );
+    }
+    // Every frame, as shipped.
+    for name in ["folding_sheet", "furling_banner"] {
+        let (worst, frame) = worst_crossings(&preset(name, &[]), false);
+        assert_eq!(worst, 0, "{name}: {worst} crossings at frame {frame}");
+    }
+}
+
+#[test]
+fn without_self_collision_the_fold_passes_through() {
+    // The check above can fail: the same fold with the family off crosses.
+    let p = preset(
+        "folding_sheet",
+        &["cloth.weft=12", "cloth.warp=12", "solver.weights.self=0"],
+    );
+    let (worst, _) = worst_crossings(&p, false);
+    assert!(worst > 0, "no crossing without self-collision");
+}
+
+#[test]
+fn the_solvers_count_agrees_with_brute_force() {
+    let p = preset(
+        "folding_sheet",
+        &["cloth.weft=12", "cloth.warp=12", "solver.weights.self=0"],
+    );
+    let mut scene = Scene::new(&p).unwrap();
+    let (edges, triangles) = mesh(12, 12);
+    let mut crossed = 0;
+    for _ in 0..scene.frames_in(p.duration) {
+        scene.step().unwrap();
+        let s = scene.solver();
+        let brute = brute_force_crossings(&s.state().position, &edges, &triangles);
+        assert_eq!(s.self_crossings(), brute, "at frame {}", scene.frame());
+        crossed += brute;
+    }
+    assert!(crossed > 0, "the comparison never saw a crossing");
+}
+
+/// A 10 × 10 sheet folded in half: its upper half lies `gap` above its
+/// lower half, mirrored, facing it; no gravity or air.
+fn folded(gap: f32, params: Params) -> Solver {
+    let spec = ClothSpec {
+        weft: 10,
+        warp: 10,
+        width: 0.9,
+        height: 0.9,
+        imperfection: 0.0,
+        thickness: 0.01,
+        ..ClothSpec::default()
+    };
+    let mut s = Solver::new(spec, params, &[]).unwrap();
+    let st = s.state_mut();
+    for j in 0..10 {
+        for i in 0..10 {
+            let k = spec.index(i, j);
+            let x = 0.1 * i as f32;
+            // Columns 0-4 below; 5-9 folded back over them.
+            st.position[k] = if i < 5 {
+                Vec3::new(x, 0.1 * j as f32, 0.0)
+            } else {
+                Vec3::new(0.9 - x, 0.1 * j as f32, gap)
+            };
+        }
+    }
+    st.prev_position.clone_from(&st.position);
+    s
+}
+
+fn calm() -> Environment {
+    Environment {
+        gravity: Vec3::ZERO,
+        air_density: 0.0,
+        ..Environment::default()
+    }
+}
+
+#[test]
+fn contacts_push_the_layers_apart_monotonically() {
+    let params = Params {
+        weights: Weights::splat(0.0).with(Family::SelfCollision, 1.0),
+        damping: 0.0,
+        ..Params::default()
+    };
+    let mut s = folded(0.004, params);
+    let first = s.violation(Family::SelfCollision);
+    assert!(
+        first.max > 0.005,
+        "the layers start inside the thickness: {first:?}"
+    );
+    let mut last = first.max;
+    for step in 0..10 {
+        s.step(&calm(), &[]).unwrap();
+        let now = s.violation(Family::SelfCollision).max;
+        assert!(now <= last + 1e-7, "rose at step {step}: {last} -> {now}");
+        last = now;
+    }
+    assert!(last < 1e-4, "still {last} inside the thickness");
+    // The upper layer stayed above: nothing crossed.
+    assert_eq!(s.self_crossings(), 0);
+}
+
+#[test]
+fn a_layer_carried_through_is_pushed_back_to_its_side() {
+    // Both layers start apart; the upper one arrives moving down so fast
+    // that one update carries it through the lower one. The side kept
+    // from the substep's start sends it back up, not on down.
+    let params = Params {
+        weights: Weights::splat(0.0).with(Family::SelfCollision, 1.0),
+        substeps: 1,
+        damping: 1.0,
+        ..Params::default()
+    };
+    let mut s = folded(0.02, params);
+    let st = s.state_mut();
+    for k in 0..st.len() {
+        if k % 10 >= 7 {
+            // 4 cm a substep, downwards: the update lands it 2 cm below.
+            st.prev_position[k].z = st.position[k].z + 0.04;
+        }
+    }
+    s.step(&calm(), &[]).unwrap();
+    let x = &s.state().position;
+    for j in 0..10 {
+        for c in 7..10 {
+            let (upper, lower) = (x[j * 10 + c], x[j * 10 + 9 - c]);
+            assert!(
+                upper.z > lower.z,
+                "column {c} went through: z {} below {}",
+                upper.z,
+                lower.z
+            );
+        }
+    }
+    assert_eq!(s.self_crossings(), 0);
+}
+
+#[test]
+fn self_contacts_are_bit_identical_for_any_thread_count() {
+    // Big enough (48 × 48) that the adjust phase shares its batches; run
+    // until the fold is laid down, with contacts in every substep.
+    let p = preset(
+        "folding_sheet",
+        &["cloth.weft=48", "cloth.warp=48", "duration=4.6"],
+    );
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut scene = Scene::new(&p).unwrap();
+            for _ in 0..scene.frames_in(p.duration) {
+                scene.step().unwrap();
+            }
+            assert!(scene.solver().violation(Family::SelfCollision).max > 0.0);
+            scene.solver().state().digest()
+        })
+    };
+    let one = run(1);
+    assert_eq!(one, run(2));
+    assert_eq!(one, run(3));
+}
+
+#[test]
+fn bad_self_collision_values_are_refused_with_their_range() {
+    for (set, key) in [
+        ("solver.weights.self=-0.5", "weights.self"),
+        ("solver.weights.self=nan", "weights.self"),
+        ("cloth.thickness=-0.001", "cloth.thickness"),
+        ("cloth.friction=-1", "cloth.friction"),
+    ] {
+        let o: Override = set.parse().unwrap();
+        let err = load::load("folding_sheet", &[o]).unwrap_err().to_string();
+        assert!(err.contains(key), "{set}: {err}");
+        assert!(err.contains("allowed"), "{set}: {err}");
+    }
+}
+
+#[test]
+fn a_thickness_unfit_for_the_spacing_is_warned_about() {
+    // The sheet's spacing is 1 m / 23 ≈ 43 mm.
+    for (thickness, says) in [("0.05", "spacing"), ("0.0001", "spacing")] {
+        let o: Override = format!("cloth.thickness={thickness}").parse().unwrap();
+        let loaded = load::load("folding_sheet", &[o]).unwrap();
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("thickness") && w.contains(says)),
+            "{thickness}: {:?}",
+            loaded.warnings
+        );
+    }
+    assert!(
+        load::load("folding_sheet", &[])
+            .unwrap()
+            .warnings
+            .is_empty()
+    );
+}
