@@ -91,8 +91,16 @@ impl SpatialHash {
 /// The cell of a point, for cells of side `1 / inv_cell`.
 #[inline]
 fn cell_of(p: Vec3, inv_cell: f32) -> IVec3 {
-    // `as` saturates, so a far particle lands in an edge cell.
-    (p * inv_cell).floor().as_ivec3()
+    let v = p * inv_cell;
+    IVec3::new(floor(v.x), floor(v.y), floor(v.z))
+}
+
+/// `⌊v⌋` as an integer, inline (without SSE4.1, `f32::floor` is a library
+/// call). `as` saturates, so a far particle lands in an edge cell.
+#[inline(always)]
+fn floor(v: f32) -> i32 {
+    let t = v as i32;
+    t - i32::from(v < t as f32)
 }
 
 /// The bucket of a cell, among `mask + 1`.

@@ -15,8 +15,10 @@
 //!    (Gauss–Seidel), so a particle's correction combines what each asks.
 //!    Each weight is a compliance (XPBD), so its effect does not depend on
 //!    iterations, substeps or resolution ([`params::Weights`]); rotations
-//!    are shaped by Eq. 3 ([`forced_rotation`]). Colliders are projected
-//!    after each sweep, friction once at the end ([`collision`]).
+//!    are shaped by Eq. 3 ([`forced_rotation`]). A fifth family,
+//!    self-collision (off by default), keeps the cloth's layers apart
+//!    ([`constraints::self_collision`]). Colliders are projected after each
+//!    sweep, friction once at the end ([`collision`]).
 //!
 //! Constraints are solved in graph-colour batches ([`topology`]): the
 //! constraints of one colour share no particle, so large batches are split
@@ -506,8 +508,14 @@ impl Solver {
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.self_crossings = crossings;
             for f in Family::ALL {
-                d.families[f].violation =
-                    family::violation(f, &self.state, &self.topology, &self.spec);
+                // Self-collision's measure needs a contact search: only
+                // while the family is on.
+                let on = f != Family::SelfCollision || crossings.is_some();
+                d.families[f].violation = if on {
+                    family::violation(f, &self.state, &self.topology, &self.spec)
+                } else {
+                    Violation::default()
+                };
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
             d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);

@@ -9,6 +9,7 @@
 //! | planarity | `α = asin(n_a · ŝ)`, zero iff `n_a · s = 0` | `∓ n⊥ / |s|` | unit `n_a × ŝ` (the paper's `v`) |
 //! | normality | `∠(n_a, n_b)`; shear: diagonal `|s| − L` | —; `∓ ŝ` | `n_a × n_b`; — |
 //! | curvature | sagitta angle `2 n̂⊥ · (x_m − ½(x_a + x_b)) / L`; bend angle | `n̂⊥`, `−½ n̂⊥` | `(n_a + n_b) × s` |
+//! | self | `s (x_p − y) · n̄ − h ≥ 0`, one-sided: a particle against a triangle's foot `y` ([`self_collision`]) | `s n̄`, `−β_k s n̄` | — |
 //!
 //! with `s = x_b − x_a`, `n⊥` the normal made perpendicular to the edge and
 //! `n̂⊥` the normalised `n_a + n_b` made perpendicular to the chord.

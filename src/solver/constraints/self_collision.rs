@@ -81,6 +81,12 @@ const INSIDE: f32 = 0.01;
 /// not slip round it edge first (no face is under either edge there).
 const INSIDE_RIM: f32 = 0.5;
 
+/// How much farther beyond a triangle's edges than [`INSIDE`] or
+/// [`INSIDE_RIM`] a particle may be, in barycentric terms, to be a contact
+/// of the substep: room to come over the triangle during the sweeps. A grid
+/// neighbour beside a triangle sits at about −1.
+const CANDIDATE: f32 = 0.25;
+
 /// Which edges of `tri` lie on the border of a `weft × warp` grid: bit `k`
 /// for the edge opposite corner `k`.
 pub fn rim(tri: [u32; 3], spec: &ClothSpec) -> u8 {
@@ -93,6 +99,61 @@ pub fn rim(tri: [u32; 3], spec: &ClothSpec) -> u8 {
         let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
         m | (u8::from(on_border(a, b)) << k)
     })
+}
+
+/// A triangle, with what every foot on it needs.
+#[derive(Clone, Copy, Debug)]
+struct Triangle {
+    corner: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    /// The unit normal, `(x_b − x_a) × (x_c − x_a)` normalised.
+    normal: Vec3,
+    /// `1 / |(x_b − x_a) × (x_c − x_a)|`, one over twice the area.
+    inv_area2: f32,
+}
+
+impl Triangle {
+    /// The triangle with corners `t`; `None` if it is degenerate.
+    #[inline(always)]
+    fn new(t: [Vec3; 3]) -> Option<Self> {
+        let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+        let cross = e1.cross(e2);
+        let area2 = cross.length();
+        if area2 <= 1e-12 {
+            return None;
+        }
+        let inv_area2 = area2.recip();
+        Some(Self {
+            corner: t[0],
+            e1,
+            e2,
+            normal: cross * inv_area2,
+            inv_area2,
+        })
+    }
+
+    /// Signed distance of `p` from the plane, along the normal.
+    #[inline(always)]
+    fn distance(&self, p: Vec3) -> f32 {
+        (p - self.corner).dot(self.normal)
+    }
+
+    /// The foot of `p`.
+    #[inline(always)]
+    fn foot(&self, p: Vec3) -> Foot {
+        let v = p - self.corner;
+        // Cross products with the normal drop v's normal part: the foot's
+        // coordinates.
+        let bb = v.cross(self.e2).dot(self.normal) * self.inv_area2;
+        let bc = self.e1.cross(v).dot(self.normal) * self.inv_area2;
+        Foot {
+            bary: [1.0 - bb - bc, bb, bc],
+            point: self.corner + self.e1 * bb + self.e2 * bc,
+            normal: self.normal,
+            distance: v.dot(self.normal),
+        }
+    }
 }
 
 /// A point's foot on a triangle's plane.
@@ -112,23 +173,20 @@ impl Foot {
     /// The foot of `p` on triangle `t`; `None` for a degenerate triangle.
     #[inline(always)]
     fn of(p: Vec3, t: [Vec3; 3]) -> Option<Self> {
-        let (e1, e2, v) = (t[1] - t[0], t[2] - t[0], p - t[0]);
-        let cross = e1.cross(e2);
-        let area2 = cross.length();
-        if area2 <= 1e-12 {
-            return None;
-        }
-        let inv = area2.recip();
-        let normal = cross * inv;
-        // Cross products with the normal drop v's normal part: the foot's
-        // coordinates.
-        let bb = v.cross(e2).dot(normal) * inv;
-        let bc = e1.cross(v).dot(normal) * inv;
-        Some(Self {
-            bary: [1.0 - bb - bc, bb, bc],
-            point: t[0] + e1 * bb + e2 * bc,
-            normal,
-            distance: v.dot(normal),
+        Triangle::new(t).map(|t| t.foot(p))
+    }
+
+    /// Whether the foot is on the triangle, its border edges (`rim`) grown
+    /// by a hem, and every edge by `more`.
+    #[inline(always)]
+    fn within(&self, rim: u8, more: f32) -> bool {
+        (0..3).all(|k| {
+            let slack = if rim & (1 << k) != 0 {
+                INSIDE_RIM
+            } else {
+                INSIDE
+            };
+            self.bary[k] >= -(slack + more)
         })
     }
 
@@ -136,14 +194,7 @@ impl Foot {
     /// by a hem.
     #[inline(always)]
     fn inside(&self, rim: u8) -> bool {
-        (0..3).all(|k| {
-            let slack = if rim & (1 << k) != 0 {
-                INSIDE_RIM
-            } else {
-                INSIDE
-            };
-            self.bary[k] >= -slack
-        })
+        self.within(rim, 0.0)
     }
 
     /// The elements' normals `n` interpolated at the foot, or the
@@ -250,14 +301,20 @@ impl SelfContacts {
             start,
             inv_mass,
         } = *layers;
+        // Cells a triangle's box (a cell's diagonal, grown by the reach) fits
+        // in two of along each axis.
         let (dx, dy) = spec.spacing();
-        self.hash.build(now, dx.max(dy));
+        self.hash.build(now, dx.max(dy) + 2.0 * reach);
         self.found.clear();
         for &tri in triangles {
             let corners = tri.map(|k| now[k as usize]);
+            let Some(t_now) = Triangle::new(corners) else {
+                continue;
+            };
             let (lo, hi) = bounds(corners, reach);
             let rim = rim(tri, spec);
             let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
+            let mut t_start = None;
             self.hash.query(lo, hi, |p| {
                 let x = now[p as usize];
                 if !(x.cmpge(lo).all() && x.cmple(hi).all())
@@ -266,16 +323,22 @@ impl SelfContacts {
                 {
                     return;
                 }
-                let (Some(f_now), Some(f_start)) = (
-                    Foot::of(x, corners),
-                    Foot::of(start[p as usize], tri.map(|k| start[k as usize])),
-                ) else {
+                // Over the triangle, or near enough to come over it in the
+                // sweeps; a neighbour beside it (a coordinate near −1) is not.
+                let f_now = t_now.foot(x);
+                if !f_now.within(rim, CANDIDATE) {
+                    return;
+                }
+                let t_start =
+                    t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
+                let Some(t_start) = t_start else {
                     return;
                 };
-                // The side it started on, if it started over the triangle;
-                // else (it is coming in from beside it, where the plane's
-                // extension says nothing of the cloth) the side it is on.
-                let side = if f_start.distance >= 0.0 { 1.0 } else { -1.0 };
+                let side = if t_start.distance(start[p as usize]) >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                };
                 if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
                     self.found.push(SelfContact {
                         particle: p,
@@ -381,21 +444,19 @@ pub fn for_each_close(
 /// crossing point inside the triangle, each by more than [`ON_PLANE`].
 /// `None` otherwise: an edge that only touches the triangle, or lies in its
 /// plane (two layers pressed flat on the ground), does not cross.
-pub fn segment_crosses(u: Vec3, v: Vec3, t: [Vec3; 3]) -> Option<f32> {
-    let cross = (t[1] - t[0]).cross(t[2] - t[0]);
-    let area2 = cross.length();
-    let normal = cross.try_normalize()?;
-    let (du, dv) = ((u - t[0]).dot(normal), (v - t[0]).dot(normal));
+fn segment_crosses(u: Vec3, v: Vec3, t: &Triangle) -> Option<f32> {
+    let (du, dv) = (t.distance(u), t.distance(v));
     if du * dv >= 0.0 || du.abs() <= ON_PLANE || dv.abs() <= ON_PLANE {
         return None;
     }
     let at = du / (du - dv);
-    let foot = Foot::of(u + (v - u) * at, t)?;
+    let foot = t.foot(u + (v - u) * at);
     // Barycentric `b_k` times twice the area over the opposite edge: the
     // distance from that edge.
+    let corners = [t.corner, t.corner + t.e1, t.corner + t.e2];
     let inside = (0..3).all(|k| {
-        let edge = t[(k + 2) % 3].distance(t[(k + 1) % 3]);
-        foot.bary[k] * area2 > ON_PLANE * edge
+        let edge = corners[(k + 2) % 3].distance(corners[(k + 1) % 3]);
+        foot.bary[k] > ON_PLANE * edge * t.inv_area2
     });
     inside.then_some(at)
 }
@@ -430,21 +491,28 @@ pub fn crossings(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> usize 
     if longest <= 0.0 || !longest.is_finite() {
         return 0;
     }
+    // Cells the query boxes (a triangle grown by half the longest edge) fit
+    // in two of along each axis.
     let mut hash = SpatialHash::default();
-    hash.build(x, longest);
+    hash.build(x, 2.0 * longest);
     let mut count = 0;
     for &tri in triangles {
         let corners = tri.map(|k| x[k as usize]);
+        let Some(t) = Triangle::new(corners) else {
+            continue;
+        };
         let (lo, hi) = bounds(corners, 0.5 * longest);
         hash.query(lo, hi, |p| {
-            if tri.contains(&p) {
+            let xp = x[p as usize];
+            if !(xp.cmpge(lo).all() && xp.cmple(hi).all()) || tri.contains(&p) {
                 return;
             }
+            let dp = t.distance(xp);
             for o in edges_at(p, spec) {
-                if tri.contains(&o) {
+                if tri.contains(&o) || dp * t.distance(x[o as usize]) >= 0.0 {
                     continue;
                 }
-                if let Some(at) = segment_crosses(x[p as usize], x[o as usize], corners)
+                if let Some(at) = segment_crosses(x[p as usize], x[o as usize], &t)
                     && (at < 0.5 || (at == 0.5 && p < o))
                 {
                     count += 1;
