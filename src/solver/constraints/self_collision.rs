@@ -26,11 +26,11 @@
 //! the triangle (a crumpled cell) the triangle's own normal is used.
 //! Positions only: no element is turned.
 //!
-//! Contacts are found once per substep ([`SelfContacts::build`]) over the
-//! predicted positions with a spatial hash ([`SpatialHash`]) and kept for
+//! Contacts are found once per substep (`SelfContacts::build`) over the
+//! predicted positions with a spatial hash (`broad_phase`) and kept for
 //! all the substep's sweeps; they are coloured like every other constraint
 //! set, so the threads share them bit-identically. Friction between layers
-//! is the colliders' Coulomb model ([`apply_friction`]).
+//! is the colliders' Coulomb model (`apply_friction`).
 //!
 //! The violation reported is the penetration `h − |(x_p − y) · n|` of the
 //! pairs closer than `h` ([`for_each_close`]), and separately the number of
