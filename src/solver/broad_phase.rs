@@ -1,7 +1,8 @@
 //! A spatial hash over particle positions: which particles lie near a box.
 //!
 //! Space is cut into cubic cells of side `cell` (the self-collision family
-//! uses the cloth's rest spacing). Each particle goes into the cell of its
+//! uses a little more than the cloth's rest spacing, so that a triangle's
+//! box overlaps at most two cells along each axis). Each particle goes into the cell of its
 //! position; cells are hashed into `2^k ≥ 2N` buckets and the particles are
 //! counting-sorted by bucket, in index order within a bucket. Building is
 //! linear in the number of particles, and a query visits the cells its box
