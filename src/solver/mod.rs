@@ -503,8 +503,7 @@ impl Solver {
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
-            let crossings =
-                (self.params.weights[Family::SelfCollision] > 0.0).then(|| self.self_crossings());
+            let crossings = self.self_collision_on().then(|| self.self_crossings());
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.self_crossings = crossings;
             for f in Family::ALL {
@@ -562,8 +561,7 @@ impl Solver {
             self.collider_to.push(c.world_pose(&self.sub_to));
         }
         self.contacts.fill(Contact::default());
-        let self_collision = self.params.weights[Family::SelfCollision] > 0.0;
-        if self_collision {
+        if self.self_collision_on() {
             self.find_self_contacts();
         } else {
             self.self_contacts.set = Default::default();
@@ -631,6 +629,11 @@ impl Solver {
             *q = q.normalize();
         }
         self.check_finite("adjust")
+    }
+
+    /// Whether the self-collision family is on (its weight above 0).
+    fn self_collision_on(&self) -> bool {
+        self.params.weights[Family::SelfCollision] > 0.0
     }
 
     /// Finds this substep's self-contacts over the predicted positions (timed

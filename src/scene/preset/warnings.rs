@@ -7,8 +7,7 @@ use super::Preset;
 use crate::solver::Family;
 
 /// Self-collision keeps layers a thickness apart: over half the grid's
-/// spacing it reaches particles only three grid steps away, which it does
-/// not exclude as neighbours.
+/// spacing it holds folds open wider than the grid can bend.
 const MAX_THICKNESS_PER_SPACING: f32 = 0.5;
 /// Under 1 % of the spacing the layers lie within rounding of each other.
 const MIN_THICKNESS_PER_SPACING: f32 = 0.01;
@@ -39,7 +38,7 @@ impl Preset {
         if self.solver.weights[Family::SelfCollision] == 0.0 {
             return None;
         }
-        let spacing = self.cloth.spec().spacing();
+        let spacing = c.spec().spacing();
         let spacing = spacing.0.min(spacing.1);
         let (lo, hi) = (
             MIN_THICKNESS_PER_SPACING * spacing,
@@ -47,7 +46,7 @@ impl Preset {
         );
         if c.thickness > hi {
             Some(format!(
-                "cloth.thickness = {} m is more than half the grid's spacing ({spacing:.4} m): self-collision then holds every fold at least that far open and pushes on particles only three grid steps apart, so the cloth folds as if stiff; use a thickness up to {hi:.4} m, or a finer grid",
+                "cloth.thickness = {} m is more than half the grid's spacing ({spacing:.4} m): self-collision then holds every fold at least that far open, wider than the grid can bend, so the cloth folds as if stiff; use a thickness up to {hi:.4} m, or a finer grid",
                 c.thickness
             ))
         } else if c.thickness < lo {

@@ -4,8 +4,8 @@
 //! that `p` is not a corner of. (A triangle beside `p` in a flat or gently
 //! bent cloth has `p`'s foot outside it; only a crease sharper than a right
 //! angle within one cell brings a neighbour's triangle over `p`, and then the
-//! contact is what keeps the crease from passing through itself.) Let `y = β_a x_a + β_b x_b + β_c x_c` be the foot of `p` on the
-//! triangle's plane (barycentric `β`), and `n̄` the elements' own normals
+//! contact is what keeps the crease from passing through itself.) Let
+//! `y = β_a x_a + β_b x_b + β_c x_c` be the foot of `p` on the triangle's plane (barycentric `β`), and `n̄` the elements' own normals
 //! interpolated there, `n̄ ∝ β_a n_a + β_b n_b + β_c n_c`. The constraint is
 //! planarity's `(x_b − x_a) · n_a = 0`, made one-sided and offset by the
 //! thickness `h`:
@@ -17,9 +17,7 @@
 //! active while the foot lies in the triangle. The side `s = ±1` is the one
 //! `p` was on at the **start** of the substep, before the update moved it: a
 //! particle that the update carried through the other layer is pushed back
-//! to where it came from, not on through. (A particle that started beside
-//! the triangle rather than over it keeps the side it has after the update:
-//! the plane's extension beyond the triangle says nothing about the cloth.) The interpolated element normal is
+//! to where it came from, not on through. The interpolated element normal is
 //! smooth across triangle edges (the flat triangles' normals jump), so a
 //! particle sliding over the other layer is pushed in a direction that does
 //! not flip from one triangle to the next; where the elements disagree with
@@ -52,8 +50,7 @@ pub struct SelfContact {
     /// The triangle's particles.
     pub triangle: [u32; 3],
     /// `+1` or `−1`: the side of the triangle the particle was on at the
-    /// substep's start (along its normal `(x_b − x_a) × (x_c − x_a)`), or
-    /// at the substep's start.
+    /// substep's start (along its normal `(x_b − x_a) × (x_c − x_a)`).
     pub side: f32,
     /// Which of the triangle's edges lie on the cloth's border: bit `k` for
     /// the edge opposite corner `k` ([`rim`]).
@@ -76,8 +73,8 @@ impl Touches for SelfContact {
 /// the triangle: neighbouring triangles overlap by a sliver, so a particle
 /// crossing the edge between two is always under one.
 const INSIDE: f32 = 0.01;
-/// The same beyond an edge on the cloth's border: a quarter of the cell, a
-/// hem around the cloth, so that a layer lying along another's border does
+/// The same beyond an edge on the cloth's border: half a cell, a hem
+/// around the cloth, so that a layer lying along another's border does
 /// not slip round it edge first (no face is under either edge there).
 const INSIDE_RIM: f32 = 0.5;
 
@@ -239,7 +236,7 @@ pub(crate) fn project<R: Recorder>(
     let wp = p.inv_mass[i];
     let wt = t.map(|k| p.inv_mass[k]);
     let b = foot.bary;
-    let w = wp + b[0] * b[0] * wt[0] + b[1] * b[1] * wt[1] + b[2] * b[2] * wt[2];
+    let w = generalised_inverse_mass(wp, wt, b);
     if w == 0.0 {
         return;
     }
@@ -257,6 +254,14 @@ pub(crate) fn project<R: Recorder>(
     }
 }
 
+/// `w_p + Σ β_k² w_k`: how far a contact's separation moves per unit of its
+/// multiplier, for the particle's inverse mass `wp`, the corners' `wt` and
+/// the foot's barycentric `b`.
+#[inline(always)]
+fn generalised_inverse_mass(wp: f32, wt: [f32; 3], b: [f32; 3]) -> f32 {
+    wp + b[0] * b[0] * wt[0] + b[1] * b[1] * wt[1] + b[2] * b[2] * wt[2]
+}
+
 /// The box around a triangle's corners, grown by `margin`.
 #[inline]
 fn bounds(t: [Vec3; 3], margin: f32) -> (Vec3, Vec3) {
@@ -272,7 +277,6 @@ pub(crate) struct SelfContacts {
     /// The contacts, colour by colour.
     pub set: Batched<SelfContact>,
     hash: SpatialHash,
-    found: Vec<SelfContact>,
 }
 
 /// The positions and orientations a contact search reads.
@@ -305,7 +309,7 @@ impl SelfContacts {
         // in two of along each axis.
         let (dx, dy) = spec.spacing();
         self.hash.build(now, dx.max(dy) + 2.0 * reach);
-        self.found.clear();
+        let mut found = Vec::new();
         for &tri in triangles {
             let corners = tri.map(|k| now[k as usize]);
             let Some(t_now) = Triangle::new(corners) else {
@@ -340,7 +344,7 @@ impl SelfContacts {
                     -1.0
                 };
                 if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
-                    self.found.push(SelfContact {
+                    found.push(SelfContact {
                         particle: p,
                         triangle: tri,
                         side,
@@ -349,7 +353,7 @@ impl SelfContacts {
                 }
             });
         }
-        self.set = Batched::coloured(std::mem::take(&mut self.found), now.len());
+        self.set = Batched::coloured(found, now.len());
     }
 }
 
@@ -383,7 +387,7 @@ pub(crate) fn apply_friction(
         }
         let b = foot.bary;
         let (wp, wt) = (inv_mass[i], t.map(|k| inv_mass[k]));
-        let w = wp + b[0] * b[0] * wt[0] + b[1] * b[1] * wt[1] + b[2] * b[2] * wt[2];
+        let w = generalised_inverse_mass(wp, wt, b);
         if w == 0.0 {
             continue;
         }
