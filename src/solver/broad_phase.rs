@@ -1,4 +1,6 @@
-//! A spatial hash over particle positions: which particles lie near a box.
+//! Self-collision's broad phase: a spatial hash over particle positions
+//! (which particles lie near a box), and the particle–triangle pairs it
+//! finds, kept from substep to substep while the motion allows.
 //!
 //! Space is cut into cubic cells of side `cell` (the self-collision family
 //! uses a little more than the cloth's rest spacing, so that a triangle's
@@ -17,6 +19,145 @@
 //! ```
 
 use glam::{IVec3, Vec3};
+
+/// Which particles lie near each triangle of a mesh: every particle inside
+/// the triangle's bounding box grown by `reach + skin`, found with a
+/// [`SpatialHash`] and then kept (a Verlet list) until the particles have
+/// moved too far for it to hold.
+///
+/// **Why it holds.** A box test is a test per axis, so it does not change
+/// when every particle moves by the same vector. Let `δ` be how far, per
+/// axis, the particles have moved since the search beyond their common
+/// motion (half the spread of their displacements along the axis). Then a
+/// particle inside a triangle's box grown by `reach` now was inside the box
+/// grown by `reach + 2δ` at the search. So while `2δ < skin` the kept pairs
+/// include every pair a new search with `reach` would find. A cloth carried
+/// along (a flag on a car) keeps its pairs however fast it goes; a flap, a
+/// fold or a turn searches again.
+///
+/// The pairs of each triangle are kept in ascending particle order, so
+/// what is built from them does not depend on when the last search was.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct NearTriangles {
+    hash: SpatialHash,
+    /// Triangle `t`'s particles are `particles[start[t]..start[t + 1]]`.
+    start: Vec<u32>,
+    particles: Vec<u32>,
+    /// The positions the search was made at; empty: no search yet.
+    searched_at: Vec<Vec3>,
+    /// The reach and skin of the last search.
+    reach_skin: (f32, f32),
+    searches: u64,
+}
+
+impl NearTriangles {
+    /// Makes sure the pairs hold for positions `x`: keeps them if the last
+    /// search had the same `reach` and `skin` and the particles have since
+    /// moved apart by less than the skin (see the type), else searches
+    /// again. `spacing` is the mesh's longest rest edge along an axis (the
+    /// hash's cells are sized from it). A triangle's own corners are never
+    /// among its particles.
+    pub(crate) fn update(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        (reach, skin): (f32, f32),
+        spacing: f32,
+    ) {
+        let same = self.reach_skin == (reach, skin) && self.start.len() == triangles.len() + 1;
+        if same && self.holds(x) {
+            return;
+        }
+        self.search(x, triangles, (reach, skin), spacing);
+    }
+
+    /// The particles near triangle `t`, in ascending order.
+    pub(crate) fn of(&self, t: usize) -> &[u32] {
+        &self.particles[self.start[t] as usize..self.start[t + 1] as usize]
+    }
+
+    /// How many searches have been made (the rest of the updates reused one).
+    #[cfg(test)]
+    fn searches(&self) -> u64 {
+        self.searches
+    }
+
+    /// Forgets the pairs: the next update searches.
+    pub(crate) fn clear(&mut self) {
+        self.searched_at.clear();
+    }
+
+    /// Whether `2δ` (see the type) is still below the skin, with a tenth of
+    /// it to spare for rounding.
+    fn holds(&self, x: &[Vec3]) -> bool {
+        self.covers(x, self.reach_skin.0)
+    }
+
+    /// Whether the kept pairs include every particle inside a triangle's
+    /// box grown by `r` at positions `x`: `r + 2δ` within the search's
+    /// `reach + skin`, with a tenth of the skin to spare for rounding.
+    pub(crate) fn covers(&self, x: &[Vec3], r: f32) -> bool {
+        if self.searched_at.len() != x.len() || x.is_empty() {
+            return false;
+        }
+        let spread = spread(x, &self.searched_at);
+        let (reach, skin) = self.reach_skin;
+        spread.is_finite() && r + spread < reach + 0.9 * skin
+    }
+
+    fn search(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        (reach, skin): (f32, f32),
+        spacing: f32,
+    ) {
+        let grow = Vec3::splat(reach + skin);
+        // Cells a triangle's box (a cell's diagonal, grown) fits in two of
+        // along each axis.
+        self.hash.build(x, spacing + 2.0 * (reach + skin));
+        self.start.clear();
+        self.particles.clear();
+        self.start.push(0);
+        for tri in triangles {
+            let corners = tri.map(|k| x[k as usize]);
+            let lo = corners[0].min(corners[1]).min(corners[2]) - grow;
+            let hi = corners[0].max(corners[1]).max(corners[2]) + grow;
+            let from = self.particles.len();
+            self.hash.query(lo, hi, |p| {
+                let xp = x[p as usize];
+                if xp.cmpge(lo).all() && xp.cmple(hi).all() && !tri.contains(&p) {
+                    self.particles.push(p);
+                }
+            });
+            self.particles[from..].sort_unstable();
+            self.start.push(self.particles.len() as u32);
+        }
+        self.searched_at.clear();
+        self.searched_at.extend_from_slice(x);
+        self.reach_skin = (reach, skin);
+        self.searches += 1;
+    }
+}
+
+/// How far apart the particles have moved from `then` to `now`, beyond
+/// their common motion: the largest spread of their displacements along an
+/// axis (`2δ` of [`NearTriangles`]). NaN if a position is not finite.
+pub(crate) fn spread(now: &[Vec3], then: &[Vec3]) -> f32 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let mut finite = true;
+    for (a, b) in now.iter().zip(then) {
+        let d = *a - *b;
+        finite &= d.is_finite();
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    if finite {
+        (hi - lo).max_element().max(0.0)
+    } else {
+        f32::NAN
+    }
+}
 
 /// Particles sorted into hashed cells.
 #[derive(Clone, Debug, Default)]
@@ -116,6 +257,68 @@ fn bucket(c: IVec3, mask: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A wavy 12 × 12 grid's points and triangles, moved by `f`.
+    fn sheet(f: impl Fn(Vec3) -> Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let n = 12u32;
+        let x = (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k % n) as f32, (k / n) as f32);
+                f(Vec3::new(
+                    i * 0.1,
+                    j * 0.1,
+                    0.03 * (i * 0.9).sin() * (j * 0.7).cos(),
+                ))
+            })
+            .collect();
+        let mut t = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = j * n + i;
+                t.push([a, a + 1, a + n + 1]);
+                t.push([a, a + n + 1, a + n]);
+            }
+        }
+        (x, t)
+    }
+
+    /// The particles in triangle `t`'s box grown by `r`, by brute force.
+    fn in_box(x: &[Vec3], t: [u32; 3], r: f32) -> Vec<u32> {
+        let c = t.map(|k| x[k as usize]);
+        let lo = c[0].min(c[1]).min(c[2]) - Vec3::splat(r);
+        let hi = c[0].max(c[1]).max(c[2]) + Vec3::splat(r);
+        (0..x.len() as u32)
+            .filter(|&p| !t.contains(&p))
+            .filter(|&p| x[p as usize].cmpge(lo).all() && x[p as usize].cmple(hi).all())
+            .collect()
+    }
+
+    #[test]
+    fn kept_pairs_cover_a_new_search_and_a_carried_cloth_keeps_them() {
+        let (reach, skin) = (0.03, 0.1);
+        let (x0, tris) = sheet(|p| p);
+        let mut near = NearTriangles::default();
+        near.update(&x0, &tris, (reach, skin), 0.1);
+        // Carried far (a car's flag): the same pairs, no new search.
+        let (x1, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0));
+        near.update(&x1, &tris, (reach, skin), 0.1);
+        assert_eq!(near.searches(), 1);
+        // Bent a little more than the skin allows: searched again. Bent a
+        // little less: kept. Either way every particle in a box grown by the
+        // reach is among the kept pairs, in ascending order.
+        for (bend, searches) in [(0.04, 1), (0.2, 2)] {
+            let (x, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0 + bend * p.x * p.x));
+            near.update(&x, &tris, (reach, skin), 0.1);
+            assert_eq!(near.searches(), searches, "bend {bend}");
+            for (k, &t) in tris.iter().enumerate() {
+                let kept = near.of(k);
+                assert!(kept.is_sorted());
+                for p in in_box(&x, t, reach) {
+                    assert!(kept.contains(&p), "triangle {k} lost particle {p}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn a_query_finds_exactly_the_particles_in_its_cells() {

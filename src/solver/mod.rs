@@ -173,6 +173,8 @@ pub struct Solver {
     sub_to: Vec<Pose>,
     /// The bodies' poses at the start of the last substep (its end is `sub_from`).
     last_from: Vec<Pose>,
+    /// The bodies' poses a step before `bodies` (to tell a jerk).
+    bodies_before: Vec<Pose>,
     collider_from: Vec<Pose>,
     collider_to: Vec<Pose>,
     contacts: Vec<Contact>,
@@ -209,6 +211,7 @@ impl Solver {
             sub_from: Vec::with_capacity(bodies.len()),
             sub_to: Vec::with_capacity(bodies.len()),
             last_from: bodies.to_vec(),
+            bodies_before: bodies.to_vec(),
             collider_from: Vec::new(),
             collider_to: Vec::new(),
             contacts: vec![Contact::default(); n],
@@ -474,6 +477,9 @@ impl Solver {
         let substeps = self.params.substeps;
         let dt = self.params.substep_dt();
         let rot = self.forced_rotation();
+        if self.self_collision_on() {
+            self.watch_for_jerks(bodies);
+        }
         for sub in 0..substeps {
             let (f0, f1) = (
                 sub as f32 / substeps as f32,
@@ -499,11 +505,14 @@ impl Solver {
             }
             after_substep(&self.state);
         }
+        self.bodies_before.copy_from_slice(&self.bodies);
         self.bodies.copy_from_slice(bodies);
+        // The tangles at the step's end: the next step's contacts leave
+        // them alone, and the diagnostics report their crossings.
+        let crossings = self.self_collision_on().then(|| self.find_tangles());
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
-            let crossings = self.self_collision_on().then(|| self.self_crossings());
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.self_crossings = crossings;
             for f in Family::ALL {
@@ -532,6 +541,9 @@ impl Solver {
         dt: f32,
         rot: &ForcedRotation,
     ) -> Result<(), NonFinite> {
+        if self.self_collision_on() && self.tangles_may_have_changed() {
+            self.find_tangles();
+        }
         let t = self.diagnostics.is_some().then(Instant::now);
         update::integrate(
             &mut self.state,
@@ -564,7 +576,7 @@ impl Solver {
         if self.self_collision_on() {
             self.find_self_contacts();
         } else {
-            self.self_contacts.set = Default::default();
+            self.self_contacts.clear();
         }
         self.multipliers.reset(
             &self.topology,
@@ -629,6 +641,56 @@ impl Solver {
             *q = q.normalize();
         }
         self.check_finite("adjust")
+    }
+
+    /// Finds which particles are tangled now (self-collision leaves them to
+    /// the other families until they come apart), and returns how many
+    /// (edge, triangle) pairs cross. Timed with the self-collision family.
+    fn find_tangles(&mut self) -> usize {
+        let t = self.diagnostics.is_some().then(Instant::now);
+        let crossings = self.self_contacts.find_tangles(
+            &self.state.position,
+            &self.topology.triangles,
+            &self.spec,
+        );
+        if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
+            d.families[Family::SelfCollision].time += t.elapsed();
+        }
+        crossings
+    }
+
+    /// Whether the cloth may have tangled or come apart since its tangles
+    /// were last found (asked at the start of a substep, before its
+    /// update): not looked for since the family was turned on, tangles not
+    /// yet undone, a layer crossed in the last substep, or a jerk in this
+    /// step or the last few ([`Solver::watch_for_jerks`]).
+    fn tangles_may_have_changed(&mut self) -> bool {
+        !self.self_contacts.tangles_found_for(self.state.len())
+            || self.self_contacts.tangles_may_have_changed()
+    }
+
+    /// Watches for tangles at every substep of this step and the next
+    /// [`JERK_WATCH`] if a body jerks its particles: if the distance an
+    /// attachment moves in this step differs from the last step's by more
+    /// than [`JERK`] rest spacings (a teleport: a bar that jumps and stops;
+    /// not a car that brakes, whose motion changes by millimetres a step).
+    /// The cloth it drags can fold through itself over those substeps.
+    fn watch_for_jerks(&mut self, bodies: &[Pose]) {
+        let (dx, dy) = self.spec.spacing();
+        let limit = JERK * dx.min(dy);
+        let at = |poses: &[Pose], a: &Attachment| poses[a.body].compose(&a.local).translation;
+        let jerk = self.attachments.iter().any(|a| {
+            let (before, from, to) = (
+                at(&self.bodies_before, a),
+                at(&self.bodies, a),
+                at(bodies, a),
+            );
+            !((to - from) - (from - before)).length().le(&limit)
+        });
+        if jerk {
+            self.self_contacts
+                .watch_for_tangles((JERK_WATCH + 1) * self.params.substeps);
+        }
     }
 
     /// Whether the self-collision family is on (its weight above 0).
@@ -727,6 +789,14 @@ const PARALLEL_MIN_PARTICLES: usize = 2048;
 /// substep: room for the adjust phase's own corrections to bring them
 /// together.
 const SELF_CONTACT_SLACK: f32 = 0.25;
+
+/// How much, in rest spacings, an attachment's motion may change from one
+/// step to the next before self-collision watches for tangles at every
+/// substep ([`Solver::watch_for_jerks`]).
+const JERK: f32 = 2.0;
+
+/// How many steps after a jerk's self-collision keeps watching.
+const JERK_WATCH: u32 = 30;
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);

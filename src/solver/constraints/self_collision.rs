@@ -38,7 +38,7 @@
 use glam::Vec3;
 
 use super::{Particles, Recorder, delta_mu, shift};
-use crate::solver::broad_phase::SpatialHash;
+use crate::solver::broad_phase::{NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
 use crate::solver::topology::{Batched, Touches};
 
@@ -271,12 +271,24 @@ fn bounds(t: [Vec3; 3], margin: f32) -> (Vec3, Vec3) {
     )
 }
 
-/// The contacts of one substep, coloured, and the hash that found them.
+/// The contacts of one substep, coloured, and the near pairs they were
+/// picked from.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct SelfContacts {
     /// The contacts, colour by colour.
     pub set: Batched<SelfContact>,
-    hash: SpatialHash,
+    near: NearTriangles,
+    /// Per particle: an end of an edge that crosses a triangle, or a corner
+    /// of a crossed triangle, where they were last looked for
+    /// ([`SelfContacts::find_tangles`]); empty until they are.
+    tangled: Vec<bool>,
+    /// Whether the last search found tangles.
+    any_tangled: bool,
+    /// Whether the last build found a particle on the other side of a
+    /// triangle than it started the substep on: a layer crossed.
+    crossed: bool,
+    /// How many more substeps to look for tangles at in any case.
+    watch: u32,
 }
 
 /// The positions and orientations a contact search reads.
@@ -289,10 +301,17 @@ pub(crate) struct Layers<'a> {
     pub inv_mass: &'a [f32],
 }
 
+/// The near pairs' skin, in rest spacings: how far the particles may move
+/// (beyond their common motion) between two searches, twice over. Larger
+/// keeps more pairs to check each substep, smaller searches more often.
+const SKIN: f32 = 1.0;
+
 impl SelfContacts {
     /// Finds every particle–triangle pair closer than `reach` (or on the
     /// other side than it started on) at the predicted positions, with the
-    /// side each started on, and colours them.
+    /// side each started on, and colours them. The pairs are checked among
+    /// the near pairs ([`NearTriangles`]), searched again only when the
+    /// cloth has moved enough to need it.
     pub(crate) fn build(
         &mut self,
         layers: &Layers,
@@ -305,12 +324,16 @@ impl SelfContacts {
             start,
             inv_mass,
         } = *layers;
-        // Cells a triangle's box (a cell's diagonal, grown by the reach) fits
-        // in two of along each axis.
         let (dx, dy) = spec.spacing();
-        self.hash.build(now, dx.max(dy) + 2.0 * reach);
+        self.near
+            .update(now, triangles, (reach, SKIN * dx.min(dy)), dx.max(dy));
         let mut found = Vec::new();
-        for &tri in triangles {
+        self.crossed = false;
+        for (t, &tri) in triangles.iter().enumerate() {
+            let near = self.near.of(t);
+            if near.is_empty() {
+                continue;
+            }
             let corners = tri.map(|k| now[k as usize]);
             let Some(t_now) = Triangle::new(corners) else {
                 continue;
@@ -318,32 +341,38 @@ impl SelfContacts {
             let (lo, hi) = bounds(corners, reach);
             let rim = rim(tri, spec);
             let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
+            let tangled = |k: u32| self.tangled.get(k as usize) == Some(&true);
+            if tri.into_iter().any(tangled) {
+                continue;
+            }
             let mut t_start = None;
-            self.hash.query(lo, hi, |p| {
+            for &p in near {
                 let x = now[p as usize];
                 if !(x.cmpge(lo).all() && x.cmple(hi).all())
-                    || tri.contains(&p)
                     || (driven && inv_mass[p as usize] == 0.0)
+                    || tangled(p)
                 {
-                    return;
+                    continue;
                 }
                 // Over the triangle, or near enough to come over it in the
                 // sweeps; a neighbour beside it (a coordinate near −1) is not.
                 let f_now = t_now.foot(x);
                 if !f_now.within(rim, CANDIDATE) {
-                    return;
+                    continue;
                 }
                 let t_start =
                     t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
                 let Some(t_start) = t_start else {
-                    return;
+                    break;
                 };
                 let side = if t_start.distance(start[p as usize]) >= 0.0 {
                     1.0
                 } else {
                     -1.0
                 };
-                if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
+                let crossed = f_now.distance * side < 0.0;
+                self.crossed |= crossed && f_now.inside(rim);
+                if f_now.distance.abs() < reach || crossed {
                     found.push(SelfContact {
                         particle: p,
                         triangle: tri,
@@ -351,9 +380,19 @@ impl SelfContacts {
                         rim,
                     });
                 }
-            });
+            }
         }
         self.set = Batched::coloured(found, now.len());
+    }
+
+    /// Drops the contacts and the near pairs (the family was turned off).
+    pub(crate) fn clear(&mut self) {
+        self.set = Batched::default();
+        self.near.clear();
+        self.tangled.clear();
+        self.any_tangled = false;
+        self.crossed = false;
+        self.watch = 0;
     }
 }
 
@@ -444,25 +483,36 @@ pub fn for_each_close(
 }
 
 /// Where segment `u → v` crosses triangle `t`, as the fraction of the way
-/// from `u`: its ends on opposite sides of the triangle's plane and the
+/// from `u`, given the ends' signed distances `(du, dv)` from its plane and
+/// its [`edge_margins`]: the ends on opposite sides of the plane and the
 /// crossing point inside the triangle, each by more than [`ON_PLANE`].
 /// `None` otherwise: an edge that only touches the triangle, or lies in its
 /// plane (two layers pressed flat on the ground), does not cross.
-fn segment_crosses(u: Vec3, v: Vec3, t: &Triangle) -> Option<f32> {
-    let (du, dv) = (t.distance(u), t.distance(v));
+#[inline]
+fn crosses_at(
+    u: Vec3,
+    v: Vec3,
+    (du, dv): (f32, f32),
+    t: &Triangle,
+    margins: &[f32; 3],
+) -> Option<f32> {
     if du * dv >= 0.0 || du.abs() <= ON_PLANE || dv.abs() <= ON_PLANE {
         return None;
     }
     let at = du / (du - dv);
     let foot = t.foot(u + (v - u) * at);
-    // Barycentric `b_k` times twice the area over the opposite edge: the
-    // distance from that edge.
+    (0..3).all(|k| foot.bary[k] > margins[k]).then_some(at)
+}
+
+/// [`ON_PLANE`] in barycentric terms at each corner: a point's coordinate
+/// `b_k` times twice the area over the opposite edge is its distance from
+/// that edge.
+fn edge_margins(t: &Triangle) -> [f32; 3] {
     let corners = [t.corner, t.corner + t.e1, t.corner + t.e2];
-    let inside = (0..3).all(|k| {
+    std::array::from_fn(|k| {
         let edge = corners[(k + 2) % 3].distance(corners[(k + 1) % 3]);
-        foot.bary[k] > ON_PLANE * edge * t.inv_area2
-    });
-    inside.then_some(at)
+        ON_PLANE * edge * t.inv_area2
+    })
 }
 
 /// How close to a triangle's plane or edges, in metres, a point counts as
@@ -473,56 +523,222 @@ pub const ON_PLANE: f32 = 1e-6;
 /// The grid's edges (weft, warp, and the diagonal that splits each cell into
 /// its two triangles) that leave particle `p` towards higher indices, then
 /// towards lower ones: every edge of the triangle mesh at `p`.
+#[inline]
 fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
-    let (w, h) = (spec.weft as i64, spec.warp as i64);
-    let (i, j) = (p as i64 % w, p as i64 / w);
-    [(1, 0), (0, 1), (1, 1), (-1, 0), (0, -1), (-1, -1)]
-        .into_iter()
-        .filter(move |(di, dj)| (0..w).contains(&(i + di)) && (0..h).contains(&(j + dj)))
-        .map(move |(di, dj)| ((j + dj) * w + i + di) as u32)
+    let (w, h) = (spec.weft, spec.warp);
+    let (i, j) = (p % w, p / w);
+    let (right, up, left, down) = (i + 1 < w, j + 1 < h, i > 0, j > 0);
+    [
+        (right, p.wrapping_add(1)),
+        (up, p.wrapping_add(w)),
+        (right && up, p.wrapping_add(w + 1)),
+        (left, p.wrapping_sub(1)),
+        (down, p.wrapping_sub(w)),
+        (left && down, p.wrapping_sub(w + 1)),
+    ]
+    .into_iter()
+    .filter_map(|(there, o)| there.then_some(o))
 }
 
 /// How many (edge, triangle) pairs of the cloth's mesh cross, among pairs
 /// that share no particle: 0 for a cloth that does not pass through itself.
 /// Each crossing is found from the edge's end nearer the crossing point,
-/// which lies within half the longest edge of the triangle.
+/// which lies within half the longest edge of the triangle's box.
 pub fn crossings(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> usize {
-    let longest = triangles
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| x[a as usize].distance(x[b as usize]))
-        .fold(0.0f32, f32::max);
-    if longest <= 0.0 || !longest.is_finite() {
-        return 0;
-    }
-    // Cells the query boxes (a triangle grown by half the longest edge) fit
-    // in two of along each axis.
-    let mut hash = SpatialHash::default();
-    hash.build(x, 2.0 * longest);
     let mut count = 0;
-    for &tri in triangles {
-        let corners = tri.map(|k| x[k as usize]);
-        let Some(t) = Triangle::new(corners) else {
-            continue;
-        };
-        let (lo, hi) = bounds(corners, 0.5 * longest);
-        hash.query(lo, hi, |p| {
-            let xp = x[p as usize];
-            if !(xp.cmpge(lo).all() && xp.cmple(hi).all()) || tri.contains(&p) {
-                return;
-            }
-            let dp = t.distance(xp);
-            for o in edges_at(p, spec) {
-                if tri.contains(&o) || dp * t.distance(x[o as usize]) >= 0.0 {
-                    continue;
-                }
-                if let Some(at) = segment_crosses(x[p as usize], x[o as usize], &t)
-                    && (at < 0.5 || (at == 0.5 && p < o))
-                {
-                    count += 1;
-                }
+    scan_crossings(x, triangles, spec, None, |_, _| count += 1);
+    count
+}
+
+impl SelfContacts {
+    /// Finds which particles are tangled at positions `x`, the ends of the
+    /// edges that cross a triangle and the triangle's corners, and returns
+    /// how many (edge, triangle) pairs cross ([`crossings`]). The near
+    /// pairs of the last substep are the candidates while they still cover
+    /// `x`; the result is the same either way.
+    pub(crate) fn find_tangles(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+    ) -> usize {
+        self.tangled.clear();
+        self.tangled.resize(x.len(), false);
+        let tangled = &mut self.tangled;
+        let mut count = 0;
+        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri| {
+            count += 1;
+            for k in edge.into_iter().chain(tri) {
+                tangled[k as usize] = true;
             }
         });
+        self.any_tangled = count > 0;
+        count
     }
-    count
+
+    /// Looks for tangles at each of the next `substeps` substeps.
+    pub(crate) fn watch_for_tangles(&mut self, substeps: u32) {
+        self.watch = self.watch.max(substeps);
+    }
+
+    /// Whether the cloth may have tangled or come apart since the tangles
+    /// were last found: some were found, a layer crossed in the last
+    /// substep, or a watch is on ([`SelfContacts::watch_for_tangles`]; this
+    /// call counts one substep of it).
+    pub(crate) fn tangles_may_have_changed(&mut self) -> bool {
+        let watching = self.watch > 0;
+        self.watch = self.watch.saturating_sub(1);
+        watching || self.any_tangled || self.crossed
+    }
+
+    /// Whether tangles have been looked for (since the last
+    /// [`SelfContacts::clear`]) on a cloth of `particles`.
+    pub(crate) fn tangles_found_for(&self, particles: usize) -> bool {
+        self.tangled.len() == particles
+    }
+}
+
+/// The hash's cells for counting crossings: a cell's rest diagonal, about
+/// one triangle. (Cells sized from the longest edge would hold the whole
+/// cloth once one edge is pulled long; small cells keep a query's cost to
+/// the particles really near.)
+fn crossing_cell(spec: &ClothSpec) -> f32 {
+    let (dx, dy) = spec.spacing();
+    dx.hypot(dy)
+}
+
+/// Calls `crossing(edge, triangle)` for every (edge, triangle) pair that
+/// crosses ([`crossings`]). Each crossing is found from the edge's nearer
+/// end `p`, which lies within half the edge `|po|` of the crossing point,
+/// and so of the triangle's box: the candidates for a triangle are the
+/// particles in its box grown by half the longest edge. Particles with an
+/// edge longer than a cell's rest diagonal (pulled long by a jerk) are
+/// checked against every triangle instead, so that one long edge does not
+/// grow every query to the whole cloth. The candidates come from `near`
+/// while its pairs cover that growth, else from a new hash.
+fn scan_crossings(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    spec: &ClothSpec,
+    near: Option<&NearTriangles>,
+    mut crossing: impl FnMut([u32; 2], [u32; 3]),
+) {
+    // Half the longest edge at each particle.
+    let half: Vec<f32> = (0..x.len() as u32)
+        .map(|p| {
+            let xp = x[p as usize];
+            edges_at(p, spec).fold(0.0f32, |m, o| m.max(xp.distance(x[o as usize])))
+        })
+        .map(|l| 0.5 * l)
+        .collect();
+    let longest = half.iter().copied().fold(0.0f32, f32::max);
+    if longest <= 0.0 || !longest.is_finite() {
+        return;
+    }
+    let grow = longest.min(crossing_cell(spec));
+    let near = near.filter(|n| n.covers(x, grow));
+    let mut hash = SpatialHash::default();
+    if near.is_none() {
+        hash.build(x, crossing_cell(spec));
+    }
+    let mut far = Vec::new();
+    for (k, &tri) in triangles.iter().enumerate() {
+        let Some(mut t) = TriangleCrossing::new(x, tri) else {
+            continue;
+        };
+        let (lo, hi) = (t.lo - Vec3::splat(grow), t.hi + Vec3::splat(grow));
+        let mut visit = |p: u32| {
+            if half[p as usize] > grow {
+                return; // in the pass below
+            }
+            let xp = x[p as usize];
+            if xp.cmpge(lo).all() && xp.cmple(hi).all() {
+                t.edges_from(p, x, spec, &mut crossing);
+            }
+        };
+        match near {
+            Some(n) => n.of(k).iter().copied().for_each(&mut visit),
+            None => hash.query(lo, hi, &mut visit),
+        }
+    }
+    far.extend((0..x.len() as u32).filter(|&p| half[p as usize] > grow));
+    if far.is_empty() {
+        return;
+    }
+    for &tri in triangles {
+        let Some(mut t) = TriangleCrossing::new(x, tri) else {
+            continue;
+        };
+        for &p in &far {
+            t.edges_from(p, x, spec, &mut crossing);
+        }
+    }
+}
+
+/// A triangle, with what counting the edges that cross it needs.
+struct TriangleCrossing {
+    corners: [u32; 3],
+    t: Triangle,
+    /// Its bounding box.
+    lo: Vec3,
+    hi: Vec3,
+    /// [`edge_margins`], once needed.
+    margins: Option<[f32; 3]>,
+}
+
+impl TriangleCrossing {
+    /// The triangle with corners `tri`; `None` if it is degenerate.
+    fn new(x: &[Vec3], tri: [u32; 3]) -> Option<Self> {
+        let c = tri.map(|k| x[k as usize]);
+        let (lo, hi) = bounds(c, 0.0);
+        Some(Self {
+            corners: tri,
+            t: Triangle::new(c)?,
+            lo,
+            hi,
+            margins: None,
+        })
+    }
+
+    /// Calls `crossing` for every edge of particle `p` that crosses the
+    /// triangle, `p` being its nearer end (or as near, and the lower index),
+    /// so that each crossing is counted once.
+    #[inline]
+    fn edges_from(
+        &mut self,
+        p: u32,
+        x: &[Vec3],
+        spec: &ClothSpec,
+        crossing: &mut impl FnMut([u32; 2], [u32; 3]),
+    ) {
+        let tri = self.corners;
+        if tri.contains(&p) {
+            return;
+        }
+        let xp = x[p as usize];
+        let dp = self.t.distance(xp);
+        if dp.abs() <= ON_PLANE {
+            return;
+        }
+        for o in edges_at(p, spec) {
+            let xo = x[o as usize];
+            let d_o = self.t.distance(xo);
+            if dp * d_o >= 0.0
+                || dp.abs() > d_o.abs()
+                || (dp.abs() == d_o.abs() && p > o)
+                || tri.contains(&o)
+            {
+                continue;
+            }
+            let half = Vec3::splat(0.5 * xp.distance(xo));
+            if !(xp.cmpge(self.lo - half).all() && xp.cmple(self.hi + half).all()) {
+                continue;
+            }
+            let t = &self.t;
+            let margins = self.margins.get_or_insert_with(|| edge_margins(t));
+            if crosses_at(xp, xo, (dp, d_o), t, margins).is_some() {
+                crossing([p, o], tri);
+            }
+        }
+    }
 }
