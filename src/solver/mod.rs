@@ -661,9 +661,9 @@ impl Solver {
 
     /// Whether the cloth may have tangled or come apart since its tangles
     /// were last found (asked at the start of a substep, before its
-    /// update): not looked for since the family was turned on, tangles not
-    /// yet undone, a layer crossed in the last substep, or a jerk in this
-    /// step or the last few ([`Solver::watch_for_jerks`]).
+    /// update): not looked for since the family was turned on, a layer
+    /// crossed in the last substep, or a jerk in this step or the last few
+    /// ([`Solver::watch_for_jerks`]).
     fn tangles_may_have_changed(&mut self) -> bool {
         !self.self_contacts.tangles_found_for(self.state.len())
             || self.self_contacts.tangles_may_have_changed()
