@@ -507,9 +507,9 @@ impl Solver {
         }
         self.bodies_before.copy_from_slice(&self.bodies);
         self.bodies.copy_from_slice(bodies);
-        // The tangles at the step's end: the next step's contacts leave
-        // them alone, and the diagnostics report their crossings.
-        let crossings = self.self_collision_on().then(|| self.find_tangles());
+        // The crossings at the step's end, for the diagnostics.
+        let crossings =
+            (self.self_collision_on() && self.diagnostics.is_some()).then(|| self.find_tangles());
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
@@ -541,7 +541,7 @@ impl Solver {
         dt: f32,
         rot: &ForcedRotation,
     ) -> Result<(), NonFinite> {
-        if self.self_collision_on() && self.tangles_may_have_changed() {
+        if self.self_collision_on() && self.self_contacts.leave_tangles_this_substep() {
             self.find_tangles();
         }
         let t = self.diagnostics.is_some().then(Instant::now);
@@ -659,22 +659,15 @@ impl Solver {
         crossings
     }
 
-    /// Whether the cloth may have tangled or come apart since its tangles
-    /// were last found (asked at the start of a substep, before its
-    /// update): not looked for since the family was turned on, a layer
-    /// crossed in the last substep, or a jerk in this step or the last few
-    /// ([`Solver::watch_for_jerks`]).
-    fn tangles_may_have_changed(&mut self) -> bool {
-        !self.self_contacts.tangles_found_for(self.state.len())
-            || self.self_contacts.tangles_may_have_changed()
-    }
-
-    /// Watches for tangles at every substep of this step and the next
-    /// [`JERK_WATCH`] if a body jerks its particles: if the distance an
-    /// attachment moves in this step differs from the last step's by more
-    /// than [`JERK`] rest spacings (a teleport: a bar that jumps and stops;
-    /// not a car that brakes, whose motion changes by millimetres a step).
-    /// The cloth it drags can fold through itself over those substeps.
+    /// Leaves tangles alone (self-collision's contacts skip the particles
+    /// of edges that cross a triangle, looked for at every substep) for this
+    /// step and the next [`JERK_WATCH`] if a body jerks its particles: if
+    /// the distance an attachment moves in this step differs from the last
+    /// step's by more than [`JERK`] rest spacings (a teleport: a bar that
+    /// jumps and stops; not a car that brakes, whose motion changes by
+    /// millimetres a step). The cloth it drags through itself then comes
+    /// apart instead of being held tangled by contacts that keep each
+    /// particle's side.
     fn watch_for_jerks(&mut self, bodies: &[Pose]) {
         let (dx, dy) = self.spec.spacing();
         let limit = JERK * dx.min(dy);
@@ -791,12 +784,12 @@ const PARALLEL_MIN_PARTICLES: usize = 2048;
 const SELF_CONTACT_SLACK: f32 = 0.25;
 
 /// How much, in rest spacings, an attachment's motion may change from one
-/// step to the next before self-collision watches for tangles at every
-/// substep ([`Solver::watch_for_jerks`]).
+/// step to the next before self-collision leaves tangles alone
+/// ([`Solver::watch_for_jerks`]).
 const JERK: f32 = 2.0;
 
-/// How many steps after a jerk's self-collision keeps watching.
-const JERK_WATCH: u32 = 30;
+/// How many steps after a jerk self-collision leaves tangles alone.
+const JERK_WATCH: u32 = 60;
 
 /// Where a state turned non-finite: phase, particle, quantity, value.
 type NonFinite = (&'static str, usize, &'static str, String);

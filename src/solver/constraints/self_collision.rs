@@ -282,11 +282,10 @@ pub(crate) struct SelfContacts {
     /// of a crossed triangle, where they were last looked for
     /// ([`SelfContacts::find_tangles`]); empty until they are.
     tangled: Vec<bool>,
-    /// Whether the last build found a particle on the other side of a
-    /// triangle than it started the substep on: a layer crossed.
-    crossed: bool,
-    /// How many more substeps to look for tangles at in any case.
+    /// How many more substeps leave tangled particles out.
     watch: u32,
+    /// Whether this substep does.
+    leaving: bool,
 }
 
 /// The positions and orientations a contact search reads.
@@ -326,7 +325,6 @@ impl SelfContacts {
         self.near
             .update(now, triangles, (reach, SKIN * dx.min(dy)), dx.max(dy));
         let mut found = Vec::new();
-        self.crossed = false;
         for (t, &tri) in triangles.iter().enumerate() {
             let near = self.near.of(t);
             if near.is_empty() {
@@ -339,7 +337,7 @@ impl SelfContacts {
             let (lo, hi) = bounds(corners, reach);
             let rim = rim(tri, spec);
             let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
-            let tangled = |k: u32| self.tangled.get(k as usize) == Some(&true);
+            let tangled = |k: u32| self.leaving && self.tangled.get(k as usize) == Some(&true);
             if tri.into_iter().any(tangled) {
                 continue;
             }
@@ -368,9 +366,7 @@ impl SelfContacts {
                 } else {
                     -1.0
                 };
-                let crossed = f_now.distance * side < 0.0;
-                self.crossed |= crossed && f_now.inside(rim);
-                if f_now.distance.abs() < reach || crossed {
+                if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
                     found.push(SelfContact {
                         particle: p,
                         triangle: tri,
@@ -388,8 +384,8 @@ impl SelfContacts {
         self.set = Batched::default();
         self.near.clear();
         self.tangled.clear();
-        self.crossed = false;
         self.watch = 0;
+        self.leaving = false;
     }
 }
 
@@ -572,27 +568,19 @@ impl SelfContacts {
         count
     }
 
-    /// Looks for tangles at each of the next `substeps` substeps.
+    /// Leaves tangled particles out of the contacts for the next `substeps`
+    /// substeps.
     pub(crate) fn watch_for_tangles(&mut self, substeps: u32) {
         self.watch = self.watch.max(substeps);
     }
 
-    /// Whether the cloth may have tangled since the tangles were last
-    /// found: a layer crossed in the last substep, or a watch is on
-    /// ([`SelfContacts::watch_for_tangles`]; this call counts one substep of
-    /// it). (Tangles already found are not looked for again at every
-    /// substep: the step's end does that, and doing it each substep cost
-    /// `flag_on_car` 15 % for no measurable gain.)
-    pub(crate) fn tangles_may_have_changed(&mut self) -> bool {
-        let watching = self.watch > 0;
+    /// Whether this substep leaves tangled particles out of the contacts:
+    /// while a watch is on ([`SelfContacts::watch_for_tangles`]; this call
+    /// counts one substep of it).
+    pub(crate) fn leave_tangles_this_substep(&mut self) -> bool {
+        self.leaving = self.watch > 0;
         self.watch = self.watch.saturating_sub(1);
-        watching || self.crossed
-    }
-
-    /// Whether tangles have been looked for (since the last
-    /// [`SelfContacts::clear`]) on a cloth of `particles`.
-    pub(crate) fn tangles_found_for(&self, particles: usize) -> bool {
-        self.tangled.len() == particles
+        self.leaving
     }
 }
 
