@@ -24,11 +24,16 @@
 //! the triangle (a crumpled cell) the triangle's own normal is used.
 //! Positions only: no element is turned.
 //!
-//! Contacts are found once per substep (`SelfContacts::build`) over the
-//! predicted positions with a spatial hash (`broad_phase`) and kept for
-//! all the substep's sweeps; they are coloured like every other constraint
-//! set, so the threads share them bit-identically. Friction between layers
-//! is the colliders' Coulomb model (`apply_friction`).
+//! Contacts are picked once per substep (`SelfContacts::build`) over the
+//! predicted positions, from the near particle–triangle pairs that the
+//! broad phase keeps while the cloth has not moved apart by more than a
+//! skin (`broad_phase::NearTriangles`), and kept for all the substep's
+//! sweeps; they are coloured like every other constraint set, so the
+//! threads share them bit-identically. For a second after a jerk, particles
+//! of edges that cross a triangle (`SelfContacts::find_tangles`) are left
+//! out, so that a cloth dragged through itself comes apart instead of being
+//! held tangled. Friction between layers is the colliders' Coulomb model
+//! (`apply_friction`).
 //!
 //! The violation reported is the penetration `h − |(x_p − y) · n|` of the
 //! pairs closer than `h` ([`for_each_close`]), and separately the number of
