@@ -2,9 +2,10 @@
 //! (which particles lie near a box), and the particle–triangle pairs it
 //! finds, kept from substep to substep while the motion allows.
 //!
-//! Space is cut into cubic cells of side `cell` (the self-collision family
-//! uses a little more than the cloth's rest spacing, so that a triangle's
-//! box overlaps at most two cells along each axis). Each particle goes into the cell of its
+//! Space is cut into cubic cells of side `cell` (for the near pairs, a
+//! rest spacing plus twice the reach and skin, so that a triangle's grown
+//! box overlaps at most two cells along each axis; for the crossing count,
+//! a rest diagonal). Each particle goes into the cell of its
 //! position; cells are hashed into `2^k ≥ 2N` buckets and the particles are
 //! counting-sorted by bucket, in index order within a bucket. Building is
 //! linear in the number of particles, and a query visits the cells its box
@@ -143,7 +144,7 @@ impl NearTriangles {
 /// How far apart the particles have moved from `then` to `now`, beyond
 /// their common motion: the largest spread of their displacements along an
 /// axis (`2δ` of [`NearTriangles`]). NaN if a position is not finite.
-pub(crate) fn spread(now: &[Vec3], then: &[Vec3]) -> f32 {
+fn spread(now: &[Vec3], then: &[Vec3]) -> f32 {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     let mut finite = true;
     for (a, b) in now.iter().zip(then) {

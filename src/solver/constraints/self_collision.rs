@@ -632,7 +632,6 @@ fn scan_crossings(
     if near.is_none() {
         hash.build(x, crossing_cell(spec));
     }
-    let mut far = Vec::new();
     for (k, &tri) in triangles.iter().enumerate() {
         let Some(mut t) = TriangleCrossing::new(x, tri) else {
             continue;
@@ -652,7 +651,9 @@ fn scan_crossings(
             None => hash.query(lo, hi, &mut visit),
         }
     }
-    far.extend((0..x.len() as u32).filter(|&p| half[p as usize] > grow));
+    let far: Vec<u32> = (0..x.len() as u32)
+        .filter(|&p| half[p as usize] > grow)
+        .collect();
     if far.is_empty() {
         return;
     }
