@@ -419,7 +419,7 @@ impl Sweep<'_> {
                     &mu.structural,
                     &structural.batches,
                     rec,
-                    |c, m, r| stretch::project(p, c, m, k.stretch, r),
+                    |c, m, n, r| stretch::project(p, c, m, n, k.stretch, r),
                 );
                 // Each particle appears once per tether batch.
                 project_batches(
@@ -428,7 +428,7 @@ impl Sweep<'_> {
                     &mu.tethers,
                     &tethers.batches,
                     rec,
-                    |t, m, r| stretch::project_tether(p, t, m, k.stretch, r),
+                    |t, m, n, r| stretch::project_tethers(p, t, m, n, k.stretch, r),
                 );
             }
             Family::Planarity => {
@@ -438,7 +438,7 @@ impl Sweep<'_> {
                     &mu.planarity,
                     &structural.batches,
                     rec,
-                    |c, m, r| planarity::project(p, c, m, k.planarity, rot, r),
+                    |c, m, n, r| planarity::project(p, c, m, n, k.planarity, rot, r),
                 );
             }
             Family::Normality => {
@@ -448,7 +448,7 @@ impl Sweep<'_> {
                     &mu.normality,
                     &structural.batches,
                     rec,
-                    |c, m, r| normality::project(p, c, m, k.normality, rot, r),
+                    |c, m, n, r| normality::project(p, c, m, n, k.normality, rot, r),
                 );
                 project_batches(
                     crew,
@@ -456,7 +456,7 @@ impl Sweep<'_> {
                     &mu.shear,
                     &shear.batches,
                     rec,
-                    |c, m, r| stretch::project(p, c, m, k.shear, r),
+                    |c, m, n, r| stretch::project(p, c, m, n, k.shear, r),
                 );
             }
             Family::Curvature => {
@@ -466,7 +466,7 @@ impl Sweep<'_> {
                     &mu.curvature,
                     &bend.batches,
                     rec,
-                    |c, m, r| curvature::project(p, c, m, k.curvature, rot, r),
+                    |c, m, n, r| curvature::project(p, c, m, n, k.curvature, rot, r),
                 );
             }
             Family::SelfCollision => {
@@ -476,7 +476,11 @@ impl Sweep<'_> {
                     &mu.self_contact,
                     &contacts.batches,
                     rec,
-                    |c, m, r| self_collision::project(p, c, m, thickness, k.self_contact, r),
+                    |cs, ms, n, r| {
+                        for (&c, m) in cs.iter().zip(ms).take(n) {
+                            self_collision::project(p, c, m, thickness, k.self_contact, r);
+                        }
+                    },
                 );
             }
         }

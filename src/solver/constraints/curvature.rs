@@ -29,70 +29,86 @@
 
 use glam::Vec3;
 
-use super::{Particles, Recorder, delta_mu, shift, turn};
-use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology::Triple};
+use super::lanes::{self, Chunk, F, LANES, V3};
+use super::{Particles, Recorder};
+use crate::solver::{forced_rotation::ForcedRotation, topology::Triple};
 
-/// Projects one bend triple with compliance `alpha_t` (`α / Δt²`, for a
-/// square cell); `mu` holds the sagitta's and the bend angle's multipliers.
+/// Projects up to [`LANES`](lanes::LANES) bend triples of one colour side by
+/// side, with compliance `alpha_t` (`α / Δt²`, for a square cell); `mu`
+/// holds each triple's sagitta and bend angle multipliers.
 #[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
-    t: Triple,
-    mu: &mut [f32; 2],
+    triples: &[Triple; LANES],
+    mu: &mut [[f32; 2]; LANES],
+    live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let (a, m, b) = (t.a as usize, t.mid as usize, t.b as usize);
-    let (na, nb) = (normal_of(p.q(a)), normal_of(p.q(b)));
-    let (xa, xm, xb) = (p.x(a), p.x(m), p.x(b));
-    let Some((c, across, chord)) = sagitta(xa, xm, xb, t.rest) else {
-        return; // straight: nothing to bend back
-    };
-    let alpha_t = alpha_t / t.aspect;
+    let a = Chunk::of(triples, |t| t.a);
+    let m = Chunk::of(triples, |t| t.mid);
+    let b = Chunk::of(triples, |t| t.b);
+    let (qa, qb) = (a.q(p), b.q(p));
+    let (na, nb) = (qa.normal(), qb.normal());
+    let (xa, xm, xb) = (a.x(p), m.x(p), b.x(p));
+    let rest = lanes::field(triples, |t| t.rest);
+    // `sagitta`, in lanes; a straight run has nothing to bend back.
+    let chord = xb - xa;
+    let offset = xm - (xa + xb) * F::splat(0.5);
+    let across = offset - chord * (offset.dot(chord) / chord.length_squared().max(F::splat(1e-18)));
+    let len = across.length();
+    let bent = lanes::live(live) & !(len.is_nan() | len.simd_le(1e-9));
+    if bent.none() {
+        return;
+    }
+    let c = F::splat(4.0) * len / rest;
+    let across = across * (F::ONE / len);
+    let alpha_t = F::splat(alpha_t) / lanes::field(triples, |t| t.aspect);
+    let mut mus = [
+        lanes::load_with(mu, |m| m[0]),
+        lanes::load_with(mu, |m| m[1]),
+    ];
 
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
     // Gradients 2n̂/L at the middle and −n̂/L at each end (L = rest / 2).
-    let (wa, wm, wb) = (p.inv_mass[a], p.inv_mass[m], p.inv_mass[b]);
-    let inv_half = 2.0 / t.rest;
-    let w = (4.0 * wm + wa + wb) * inv_half * inv_half;
-    if w > 0.0 {
-        let d = delta_mu(c, w, alpha_t, mu[0]);
-        mu[0] += d;
+    let (wa, wm, wb) = (
+        a.gather(p.inv_mass),
+        m.gather(p.inv_mass),
+        b.gather(p.inv_mass),
+    );
+    let inv_half = F::splat(2.0) / rest;
+    let w = (F::splat(4.0) * wm + wa + wb) * inv_half * inv_half;
+    let on = bent & w.simd_gt(0.0);
+    if on.any() {
+        let d = lanes::delta_mu(c, w, alpha_t, mus[0]);
+        mus[0] = on.select(mus[0] + d, mus[0]);
         let step = across * (d * inv_half);
-        if wm > 0.0 {
-            shift(p, m, step * (2.0 * wm), rec);
-        }
-        if wa > 0.0 {
-            shift(p, a, step * -wa, rec);
-        }
-        if wb > 0.0 {
-            shift(p, b, step * -wb, rec);
-        }
+        m.shift(p, step * (F::splat(2.0) * wm), on & wm.simd_gt(0.0), rec);
+        a.shift(p, step * -wa, on & wa.simd_gt(0.0), rec);
+        b.shift(p, step * -wb, on & wb.simd_gt(0.0), rec);
     }
 
     // Rotation: the ends' normals toward each other about the bending axis
     // e = n̂ × chord; the bend angle β from n_a to n_b about e has gradients
     // −e at a and +e at b. Over a run of two edges it counts four times
     // less than the sagitta angle, so its compliance is four times larger.
-    let (ba, bb) = (p.inv_inertia[a], p.inv_inertia[b]);
+    let (ba, bb) = (a.gather(p.inv_inertia), b.gather(p.inv_inertia));
     let e = across.cross(chord);
     let e_len = e.length();
-    if ba + bb <= 0.0 || e_len <= 1e-9 {
-        return;
+    let on = bent & !((ba + bb).simd_le(0.0) | e_len.simd_le(1e-9));
+    if on.any() {
+        let e: V3 = e * (F::ONE / e_len);
+        let bend = lanes::atan2(na.cross(nb).dot(e), na.dot(nb));
+        let mut d = lanes::delta_mu(bend, ba + bb, F::splat(4.0) * alpha_t, mus[1]);
+        d *= lanes::scale(rot, bend.abs(), on.select(ba.max(bb) * d.abs(), F::ZERO));
+        mus[1] = on.select(mus[1] + d, mus[1]);
+        a.turn(p, qa, e * (-ba * d), on & ba.simd_gt(0.0), rec);
+        b.turn(p, qb, e * (bb * d), on & bb.simd_gt(0.0), rec);
     }
-    let e = e * e_len.recip();
-    let bend = super::atan2(na.cross(nb).dot(e), na.dot(nb));
-    let mut d = delta_mu(bend, ba + bb, 4.0 * alpha_t, mu[1]);
-    d *= rot.scale(bend.abs(), ba.max(bb) * d.abs());
-    mu[1] += d;
-    if ba > 0.0 {
-        turn(p, a, e * (-ba * d), rec);
-    }
-    if bb > 0.0 {
-        turn(p, b, e * (bb * d), rec);
-    }
+    let (m0, m1) = (mus[0].to_array(), mus[1].to_array());
+    *mu = lanes::each(|k| [m0[k], m1[k]]);
 }
 
 /// The sagitta angle `C = 2 |d⊥| / L` of a run (`L` half the run's rest

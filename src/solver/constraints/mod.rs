@@ -34,6 +34,7 @@
 //! the same fraction.
 
 pub mod curvature;
+pub(crate) mod lanes;
 pub mod normality;
 pub mod planarity;
 pub mod self_collision;
@@ -47,6 +48,7 @@ use super::cloth::turn_by;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
 use super::team::Crew;
+use lanes::LANES;
 
 /// A slice that the threads of a parallel region write element by element.
 ///
@@ -209,26 +211,45 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 /// its own multiplier in `mu` (same index). Every thread of `crew` takes its
 /// share of each batch and waits for the others before the next: within a
 /// batch the order does not matter (no shared particles), so the result is
-/// bit-identical for any number of threads.
+/// bit-identical for any number of threads. `project` is handed the share
+/// in chunks of up to [`LANES`] constraints with their multipliers, for the
+/// kernels that project a chunk side by side ([`lanes`]).
 pub(crate) fn project_batches<T, M, R>(
     crew: &Crew,
     items: &[T],
     mu: &Shared<M>,
     batches: &[Range<usize>],
     rec: &mut R,
-    project: impl Fn(T, &mut M, &mut R),
+    project: impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
 ) where
     T: Copy,
+    M: Copy,
     R: Recorder,
 {
     assert_eq!(items.len(), mu.len());
     for range in batches.iter().filter(|b| !b.is_empty()) {
         let mine = crew.share(range.len());
-        let start = range.start + mine.start;
-        for (k, &item) in items[start..range.start + mine.end].iter().enumerate() {
-            // SAFETY: `start + k < items.len() == mu.len()`; shares are
-            // disjoint, so this multiplier is this thread's until the barrier.
-            project(item, unsafe { mu.get(start + k) }, rec);
+        let share = range.start + mine.start..range.start + mine.end;
+        // SAFETY: within `mu` (same length as `items`, checked); shares are
+        // disjoint, so these multipliers are this thread's until the barrier.
+        let mus = unsafe { mu.slice(share.clone()) };
+        let mut chunks = items[share].chunks_exact(LANES);
+        let mut mu_chunks = mus.chunks_exact_mut(LANES);
+        for (chunk, m) in (&mut chunks).zip(&mut mu_chunks) {
+            let (chunk, m) = (
+                chunk.try_into().expect("exact"),
+                m.try_into().expect("exact"),
+            );
+            project(chunk, m, LANES, rec);
+        }
+        // The tail, padded with copies of its first constraint, which the
+        // kernels compute but never write.
+        let (tail, mu_tail) = (chunks.remainder(), mu_chunks.into_remainder());
+        if let (Some(&first), Some(&first_mu)) = (tail.first(), mu_tail.first()) {
+            let chunk = lanes::each(|k| tail.get(k).copied().unwrap_or(first));
+            let mut m = lanes::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
+            project(&chunk, &mut m, tail.len(), rec);
+            mu_tail.copy_from_slice(&m[..tail.len()]);
         }
         crew.barrier();
     }

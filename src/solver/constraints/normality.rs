@@ -18,40 +18,64 @@
 
 use glam::Vec3;
 
-use super::{Particles, Recorder, delta_mu, turn};
-use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology::Pair};
+use super::lanes::{self, Chunk, F, LANES};
+use super::{Particles, Recorder};
+use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
-/// Projects the normals of one edge toward each other, with compliance
-/// `alpha_t` (`α / Δt²`, for a square cell).
+/// Projects the normals of up to [`LANES`](lanes::LANES) edges of one
+/// colour toward each other, side by side, with compliance `alpha_t`
+/// (`α / Δt²`, for a square cell).
 #[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
-    pair: Pair,
-    mu: &mut f32,
+    pairs: &[Pair; LANES],
+    mu: &mut [f32; LANES],
+    live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let (a, b) = (pair.a as usize, pair.b as usize);
-    let (ba, bb) = (p.inv_inertia[a], p.inv_inertia[b]);
+    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
+    let (ba, bb) = (a.gather(p.inv_inertia), b.gather(p.inv_inertia));
     let w = ba + bb;
-    if w <= 0.0 {
+    let mut on = lanes::live(live) & !w.simd_le(0.0);
+    if on.none() {
         return;
     }
-    let (na, nb) = (normal_of(p.q(a)), normal_of(p.q(b)));
-    let Some((axis, angle)) = axis_angle(na, nb, p.x(b) - p.x(a)) else {
-        return;
-    };
-    let mut d = delta_mu(angle, w, alpha_t / pair.aspect, *mu);
+    let (qa, qb) = (a.q(p), b.q(p));
+    let (na, nb) = (qa.normal(), qb.normal());
+    // `axis_angle`, lane by lane: the regular case in lanes, the rest alone.
+    let axis = na.cross(nb);
+    let sin = axis.length();
+    let mut axis = axis * (F::ONE / sin);
+    let mut angle = lanes::atan2(sin, na.dot(nb));
+    let odd = on & !sin.simd_gt(1e-9);
+    if odd.any() {
+        let bits = odd.to_bitmask();
+        for k in (0..lanes::LANES).filter(|k| bits & (1 << k) != 0) {
+            let edge = p.x(b.at(k)) - p.x(a.at(k));
+            match axis_angle(na.lane(k), nb.lane(k), edge) {
+                Some((ax, an)) => {
+                    axis.set_lane(k, ax);
+                    angle.as_mut_array()[k] = an;
+                }
+                None => on.as_mut_array()[k] = 0.0,
+            }
+        }
+    }
+    let mut m = lanes::load_with(mu, |m| *m);
+    let mut d = lanes::delta_mu(
+        angle,
+        w,
+        F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect),
+        m,
+    );
     // Gradients: −axis at a, +axis at b; the larger turn is Eq. 3's to shape.
-    d *= rot.scale(angle, ba.max(bb) * d.abs());
-    *mu += d;
-    if ba > 0.0 {
-        turn(p, a, axis * (-ba * d), rec);
-    }
-    if bb > 0.0 {
-        turn(p, b, axis * (bb * d), rec);
-    }
+    d *= lanes::scale(rot, angle, on.select(ba.max(bb) * d.abs(), F::ZERO));
+    m = on.select(m + d, m);
+    lanes::store(m, mu);
+    a.turn(p, qa, axis * (-ba * d), on & ba.simd_gt(0.0), rec);
+    b.turn(p, qb, axis * (bb * d), on & bb.simd_gt(0.0), rec);
 }
 
 /// The unit axis that turns `na` toward `nb`, and the angle between them;

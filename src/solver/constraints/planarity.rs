@@ -17,24 +17,35 @@
 
 use glam::Vec3;
 
-use super::{Particles, Recorder, delta_mu, shift, turn};
-use crate::solver::{cloth::normal_of, forced_rotation::ForcedRotation, topology::Pair};
+use super::Particles;
+use super::Recorder;
+use super::lanes::{self, Chunk, F, LANES};
+use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
-/// Projects one edge from both ends, with compliance `alpha_t` (`α / Δt²`,
-/// for a square cell); `mu` holds the two sides' multipliers.
+/// Projects up to [`LANES`](lanes::LANES) edges of one colour side by side,
+/// each from both ends, with compliance `alpha_t` (`α / Δt²`, for a square
+/// cell); `mu` holds each edge's two sides' multipliers.
 #[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
-    pair: Pair,
-    mu: &mut [f32; 2],
+    pairs: &[Pair; LANES],
+    mu: &mut [[f32; 2]; LANES],
+    live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let alpha_t = alpha_t / pair.aspect;
-    let (a, b) = (pair.a as usize, pair.b as usize);
-    one_side(p, a, b, &mut mu[0], alpha_t, rot, rec);
-    one_side(p, b, a, &mut mu[1], alpha_t, rot, rec);
+    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
+    let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
+    let mut m = [
+        lanes::load_with(mu, |m| m[0]),
+        lanes::load_with(mu, |m| m[1]),
+    ];
+    let live = lanes::live(live);
+    one_side(p, &a, &b, &mut m[0], live, alpha_t, rot, rec);
+    one_side(p, &b, &a, &mut m[1], live, alpha_t, rot, rec);
+    let (m0, m1) = (m[0].to_array(), m[1].to_array());
+    *mu = lanes::each(|k| [m0[k], m1[k]]);
 }
 
 /// The angle `α = asin(n · ŝ)` of the edge `e → o` out of `e`'s tangent
@@ -64,46 +75,55 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
     ))
 }
 
-/// Brings `o` into the tangent plane of `e`.
+/// Brings each lane's `o` into the tangent plane of its `e`.
 ///
 /// The constraint is the angle `α = asin(n · ŝ)` of the edge out of the plane
-/// (the same zero set as `n · s`). Its gradients stay useful even when the
-/// normal lies along the edge: in rotation, the unit axis `n × ŝ / |n × ŝ|`;
-/// in position, `n⊥ / |s|` with `n⊥` the normal made perpendicular to the
-/// edge, so the edge turns instead of shortening and never fights the length
-/// limit.
-#[inline]
+/// (the same zero set as `n · s`; [`out_of_plane`], lane by lane). Its
+/// gradients stay useful even when the normal lies along the edge: in
+/// rotation, the unit axis `n × ŝ / |n × ŝ|`; in position, `n⊥ / |s|` with
+/// `n⊥` the normal made perpendicular to the edge, so the edge turns instead
+/// of shortening and never fights the length limit.
+#[inline(always)]
 fn one_side<R: Recorder>(
     p: &Particles,
-    e: usize,
-    o: usize,
-    mu: &mut f32,
-    alpha_t: f32,
+    e: &Chunk,
+    o: &Chunk,
+    mu: &mut F,
+    live: lanes::Mask,
+    alpha_t: F,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let Some((alpha, axis, across, len)) = out_of_plane(normal_of(p.q(e)), p.x(o) - p.x(e)) else {
-        return;
-    };
-    let (we, wo, be) = (p.inv_mass[e], p.inv_mass[o], p.inv_inertia[e]);
-    let inv_len = len.recip();
+    let q = e.q(p);
+    let n = q.normal();
+    let s = o.x(p) - e.x(p);
+    let len = s.length();
+    let inv_len = F::ONE / len;
+    let dir = s * inv_len;
+    let sin = lanes::clamp_unit(n.dot(dir));
+    let axis = n.cross(dir);
+    let cos = axis.length();
+    let inv_cos = F::ONE / cos;
+    let (we, wo, be) = (
+        e.gather(p.inv_mass),
+        o.gather(p.inv_mass),
+        e.gather(p.inv_inertia),
+    );
     let w = (we + wo) * inv_len * inv_len + be;
-    if w <= 0.0 {
+    let on = live & !len.simd_le(1e-9) & !cos.simd_le(1e-6) & !w.simd_le(0.0);
+    if on.none() {
         return;
     }
-    let mut d = delta_mu(alpha, w, alpha_t, *mu);
-    d *= rot.scale(alpha.abs(), be * d.abs());
-    *mu += d;
+    let alpha = lanes::atan(sin * inv_cos);
+    let axis = axis * inv_cos;
+    let across = (n - dir * sin) * inv_cos;
+    let mut d = lanes::delta_mu(alpha, w, alpha_t, *mu);
+    d *= lanes::scale(rot, alpha.abs(), on.select(be * d.abs(), F::ZERO));
+    *mu = on.select(*mu + d, *mu);
     let step = across * (d * inv_len);
-    if wo > 0.0 {
-        shift(p, o, step * wo, rec);
-    }
-    if we > 0.0 {
-        shift(p, e, step * -we, rec);
-    }
-    if be > 0.0 {
-        turn(p, e, axis * (be * d), rec);
-    }
+    o.shift(p, step * wo, on & wo.simd_gt(0.0), rec);
+    e.shift(p, step * -we, on & we.simd_gt(0.0), rec);
+    e.turn(p, q, axis * (be * d), on & be.simd_gt(0.0), rec);
 }
 
 /// The larger of the two one-sided angles `|α|` that the projection removes,

@@ -20,39 +20,39 @@
 
 use glam::Vec3;
 
-use super::{Particles, Recorder, delta_mu, shift};
+use super::lanes::{self, Chunk, F, LANES};
+use super::{Particles, Recorder};
 use crate::solver::topology::Pair;
 
-/// Projects one distance constraint with compliance `alpha_t` (`α / Δt²`
-/// for a square cell; divided by the pair's aspect).
+/// Projects up to [`LANES`](lanes::LANES) distance constraints of one colour
+/// side by side, with compliance `alpha_t` (`α / Δt²` for a square cell;
+/// divided by each pair's aspect).
 #[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
-    pair: Pair,
-    mu: &mut f32,
+    pairs: &[Pair; LANES],
+    mu: &mut [f32; LANES],
+    live: usize,
     alpha_t: f32,
     rec: &mut R,
 ) {
-    let (a, b) = (pair.a as usize, pair.b as usize);
-    let (wa, wb) = (p.inv_mass[a], p.inv_mass[b]);
+    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
+    let (wa, wb) = (a.gather(p.inv_mass), b.gather(p.inv_mass));
     let w = wa + wb;
-    if w == 0.0 {
-        return;
-    }
-    let s = p.x(b) - p.x(a);
+    let s = b.x(p) - a.x(p);
     let len = s.length();
-    if len <= 1e-9 {
+    let on = lanes::live(live) & !w.simd_eq(0.0) & !len.simd_le(1e-9);
+    if on.none() {
         return;
     }
-    let d = delta_mu(len - pair.rest, w, alpha_t / pair.aspect, *mu);
-    *mu += d;
-    let dir = s * (d * len.recip());
-    if wa > 0.0 {
-        shift(p, a, dir * -wa, rec);
-    }
-    if wb > 0.0 {
-        shift(p, b, dir * wb, rec);
-    }
+    let rest = lanes::field(pairs, |c| c.rest);
+    let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
+    let m = lanes::load_with(mu, |m| *m);
+    let d = lanes::delta_mu(len - rest, w, alpha_t, m);
+    lanes::store(on.select(m + d, m), mu);
+    let dir = s * (d * (F::ONE / len));
+    a.shift(p, dir * -wa, on & wa.simd_gt(0.0), rec);
+    b.shift(p, dir * wb, on & wb.simd_gt(0.0), rec);
 }
 
 /// One free particle's limit on its distance from a driven particle.
@@ -69,29 +69,36 @@ pub struct Tether {
     pub span: f32,
 }
 
-/// Projects one tether: pulls the particle back if it is too far.
+/// Projects up to [`LANES`](lanes::LANES) tethers of one batch side by
+/// side: pulls each particle back if it is too far.
 #[inline]
-pub(crate) fn project_tether<R: Recorder>(
+pub(crate) fn project_tethers<R: Recorder>(
     p: &Particles,
-    t: Tether,
-    mu: &mut f32,
+    tethers: &[Tether; LANES],
+    mu: &mut [f32; LANES],
+    live: usize,
     alpha_t: f32,
     rec: &mut R,
 ) {
-    let (i, a) = (t.particle as usize, t.anchor as usize);
-    let s = p.x(i) - p.x(a);
+    let (i, anchor) = (
+        Chunk::of(tethers, |t| t.particle),
+        Chunk::of(tethers, |t| t.anchor),
+    );
+    let s = i.x(p) - anchor.x(p);
     let len = s.length();
-    if len <= 1e-9 {
+    let on = lanes::live(live) & !len.simd_le(1e-9);
+    if on.none() {
         return;
     }
-    let w = p.inv_mass[i];
+    let w = i.gather(p.inv_mass);
+    let rest = lanes::field(tethers, |t| t.rest);
+    let alpha_t = F::splat(alpha_t) * lanes::field(tethers, |t| t.span);
+    let m = lanes::load_with(mu, |m| *m);
     // One-sided: the multiplier may only pull (μ ≤ 0).
-    let next = (*mu + delta_mu(len - t.rest, w, alpha_t * t.span, *mu)).min(0.0);
-    let d = next - *mu;
-    *mu = next;
-    if d != 0.0 {
-        shift(p, i, s * (w * d / len), rec);
-    }
+    let next = (m + lanes::delta_mu(len - rest, w, alpha_t, m)).min(F::ZERO);
+    let d = next - m;
+    lanes::store(on.select(next, m), mu);
+    i.shift(p, s * (w * d / len), on & !d.simd_eq(0.0), rec);
 }
 
 /// Tethers in two batches: every free particle's tether to its nearest

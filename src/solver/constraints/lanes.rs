@@ -1,0 +1,449 @@
+//! Four constraints at a time: SIMD lanes over a colour batch.
+//!
+//! The kernels are chains of dependent operations (a length, a reciprocal,
+//! an angle, a division for `Δμ`, a turn), so one constraint at a time
+//! leaves the core waiting on latencies. The constraints of a colour batch
+//! share no free particle, so [`LANES`] of them can be projected side by
+//! side: their inputs are gathered into lanes ([`V3`], [`Q4`], one
+//! [`wide::f32x4`] per component), every operation runs on all lanes at
+//! once, and the results are scattered back constraint by constraint.
+//!
+//! **Same result as one at a time.** Every lane runs exactly the operations,
+//! in exactly the order, of the scalar formula it stands for (IEEE addition,
+//! multiplication, division and square root are correctly rounded whether
+//! done in a lane or alone), and the rare branches (a steep arctangent, a
+//! turn past the series' range, Eq. 3 cutting a turn, a degenerate edge) are
+//! handed to the scalar code for the lanes that take them. So a
+//! constraint's correction does not depend on which chunk, lane or thread
+//! projects it, and results stay bit-identical for any number of threads.
+//!
+//! A chunk shorter than [`LANES`] (the end of a thread's share) is padded
+//! with copies of its first constraint, which are computed and never
+//! written (see [`live`] and [`project_batches`](super::project_batches)).
+
+use glam::{Quat, Vec3};
+use wide::f32x4;
+
+use super::{ATAN_POLY, Particles, Recorder, shift, turn};
+use crate::solver::forced_rotation::ForcedRotation;
+
+/// Constraints projected side by side.
+pub(crate) const LANES: usize = 4;
+
+/// One `f32` per lane.
+pub(crate) type F = f32x4;
+
+/// A lane mask: all bits set where true.
+pub(crate) type Mask = f32x4;
+
+/// The particle indices of one role (say, every constraint's first end)
+/// across a chunk of [`LANES`] constraints.
+#[derive(Clone, Copy)]
+pub(crate) struct Chunk {
+    idx: [usize; LANES],
+}
+
+/// `[f(0), f(1), …]`, one per lane.
+#[inline(always)]
+pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
+    [f(0), f(1), f(2), f(3)]
+}
+
+/// The mask of the first `live` lanes.
+#[inline(always)]
+pub(crate) fn live(live: usize) -> Mask {
+    const ON: f32 = f32::from_bits(u32::MAX);
+    F::new(each(|k| if k < live { ON } else { 0.0 }))
+}
+
+impl Chunk {
+    /// The indices `f(item)` of a chunk's constraints.
+    #[inline(always)]
+    pub(crate) fn of<T: Copy>(items: &[T; LANES], f: impl Fn(T) -> u32) -> Self {
+        Self {
+            idx: each(|k| f(items[k]) as usize),
+        }
+    }
+
+    /// The particle index in lane `k`.
+    #[inline(always)]
+    pub(crate) fn at(&self, k: usize) -> usize {
+        self.idx[k]
+    }
+
+    /// `values[i]` for each lane's particle `i`.
+    #[inline(always)]
+    pub(crate) fn gather(&self, values: &[f32]) -> F {
+        F::new(each(|k| values[self.idx[k]]))
+    }
+
+    /// Each lane's position.
+    #[inline(always)]
+    pub(crate) fn x(&self, p: &Particles) -> V3 {
+        V3::from_lanes(each(|k| p.x(self.idx[k])))
+    }
+
+    /// Each lane's orientation.
+    #[inline(always)]
+    pub(crate) fn q(&self, p: &Particles) -> Q4 {
+        let q = each(|k| p.q(self.idx[k]));
+        Q4 {
+            x: F::new(each(|k| q[k].x)),
+            y: F::new(each(|k| q[k].y)),
+            z: F::new(each(|k| q[k].z)),
+            w: F::new(each(|k| q[k].w)),
+        }
+    }
+
+    /// Moves each lane's particle by its `dx`, in the lanes of `mask`.
+    #[inline(always)]
+    pub(crate) fn shift<R: Recorder>(&self, p: &Particles, dx: V3, mask: Mask, rec: &mut R) {
+        let bits = mask.to_bitmask();
+        for k in 0..LANES {
+            if bits & (1 << k) != 0 {
+                shift(p, self.idx[k], dx.lane(k), rec);
+            }
+        }
+    }
+
+    /// Turns each lane's particle, whose orientation was `q`, by the
+    /// rotation vector `omega`, in the lanes of `mask` (as
+    /// [`super::turn`]).
+    #[inline(always)]
+    pub(crate) fn turn<R: Recorder>(
+        &self,
+        p: &Particles,
+        q: Q4,
+        omega: V3,
+        mask: Mask,
+        rec: &mut R,
+    ) {
+        let bits = mask.to_bitmask();
+        if bits == 0 {
+            return;
+        }
+        let (turned, series) = turn_by(q, omega);
+        let series = series.to_bitmask();
+        for k in 0..LANES {
+            if bits & (1 << k) == 0 {
+                continue;
+            }
+            let i = self.idx[k];
+            if series & (1 << k) == 0 {
+                turn(p, i, omega.lane(k), rec);
+                continue;
+            }
+            p.set_q(i, turned.lane(k));
+            if R::ON {
+                rec.turned(i, omega.lane(k));
+            }
+        }
+    }
+}
+
+/// A vector per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct V3 {
+    pub x: F,
+    pub y: F,
+    pub z: F,
+}
+
+impl V3 {
+    #[inline(always)]
+    fn from_lanes(v: [Vec3; LANES]) -> Self {
+        Self {
+            x: F::new(each(|k| v[k].x)),
+            y: F::new(each(|k| v[k].y)),
+            z: F::new(each(|k| v[k].z)),
+        }
+    }
+
+    /// Lane `k`'s vector.
+    #[inline(always)]
+    pub(crate) fn lane(&self, k: usize) -> Vec3 {
+        Vec3::new(
+            self.x.as_array()[k],
+            self.y.as_array()[k],
+            self.z.as_array()[k],
+        )
+    }
+
+    /// Sets lane `k`'s vector.
+    #[inline(always)]
+    pub(crate) fn set_lane(&mut self, k: usize, v: Vec3) {
+        self.x.as_mut_array()[k] = v.x;
+        self.y.as_mut_array()[k] = v.y;
+        self.z.as_mut_array()[k] = v.z;
+    }
+
+    /// As glam's `Vec3::dot`.
+    #[inline(always)]
+    pub(crate) fn dot(self, o: Self) -> F {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// As glam's `Vec3::cross`.
+    #[inline(always)]
+    pub(crate) fn cross(self, o: Self) -> Self {
+        Self {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+
+    /// As glam's `Vec3::length_squared`.
+    #[inline(always)]
+    pub(crate) fn length_squared(self) -> F {
+        self.dot(self)
+    }
+
+    /// As glam's `Vec3::length`.
+    #[inline(always)]
+    pub(crate) fn length(self) -> F {
+        self.dot(self).sqrt()
+    }
+}
+
+impl std::ops::Add for V3 {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl std::ops::Sub for V3 {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl std::ops::Mul<F> for V3 {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, s: F) -> Self {
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+}
+
+/// A quaternion per lane.
+#[derive(Clone, Copy)]
+pub(crate) struct Q4 {
+    pub x: F,
+    pub y: F,
+    pub z: F,
+    pub w: F,
+}
+
+impl Q4 {
+    #[inline(always)]
+    fn lane(&self, k: usize) -> Quat {
+        Quat::from_xyzw(
+            self.x.as_array()[k],
+            self.y.as_array()[k],
+            self.z.as_array()[k],
+            self.w.as_array()[k],
+        )
+    }
+
+    /// Each lane's normal (as [`normal_of`](crate::solver::cloth::normal_of)).
+    #[inline(always)]
+    pub(crate) fn normal(&self) -> V3 {
+        let two = F::splat(2.0);
+        V3 {
+            x: two * (self.x * self.z + self.w * self.y),
+            y: two * (self.y * self.z - self.w * self.x),
+            z: F::ONE - two * (self.x * self.x + self.y * self.y),
+        }
+    }
+
+    /// `self * q`, with glam's order of operations for `Quat`'s product.
+    #[inline(always)]
+    fn mul(self, q: Self) -> Self {
+        let l = self;
+        Self {
+            x: (l.w * q.x + l.x * q.w) + (l.y * q.z - l.z * q.y),
+            y: (l.w * q.y - l.x * q.z) + (l.y * q.w + l.z * q.x),
+            z: (l.w * q.z + l.x * q.y) + (l.z * q.w - l.y * q.x),
+            w: (l.w * q.w - l.x * q.x) - (l.y * q.y + l.z * q.z),
+        }
+    }
+}
+
+/// [`turn_by`](crate::solver::cloth::turn_by) by its half-angle series, in
+/// every lane; the mask says which lanes are within the series' range (the
+/// others need the scalar turn).
+#[inline(always)]
+fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
+    let t2 = r.length_squared();
+    let t4 = t2 * t2;
+    let c = (F::ONE - t2 * F::splat(1.0 / 8.0)) + t4 * F::splat(1.0 / 384.0);
+    let s = (F::splat(0.5) - t2 * F::splat(1.0 / 48.0)) + t4 * F::splat(1.0 / 3840.0);
+    let d = Q4 {
+        x: r.x * s,
+        y: r.y * s,
+        z: r.z * s,
+        w: c,
+    };
+    (d.mul(q), t2.simd_lt(0.0025))
+}
+
+/// [`atan`](super::atan) in every lane.
+#[inline(always)]
+pub(crate) fn atan(t: F) -> F {
+    let a = t.abs();
+    let t2 = t * t;
+    let small =
+        t * (F::ONE - t2 * (F::splat(1.0 / 3.0) - t2 * (F::splat(0.2) - t2 * F::splat(1.0 / 7.0))));
+    let z = a * a;
+    let z2 = z * z;
+    let c = ATAN_POLY.map(F::splat);
+    let low = (c[0] + c[1] * z) + (c[2] + c[3] * z) * z2;
+    let high = (c[4] + c[5] * z) + (c[6] + c[7] * z) * z2;
+    let poly = (a * (low + high * (z2 * z2))).copysign(t);
+    let mut out = a.simd_lt(0.05).select(small, poly);
+    let steep = a.simd_gt(1.0);
+    if steep.any() {
+        let bits = steep.to_bitmask();
+        let arr = out.as_mut_array();
+        for (k, slot) in arr.iter_mut().enumerate() {
+            if bits & (1 << k) != 0 {
+                *slot = super::atan(t.as_array()[k]);
+            }
+        }
+    }
+    out
+}
+
+/// [`atan2`](super::atan2) in every lane.
+#[inline(always)]
+pub(crate) fn atan2(y: F, x: F) -> F {
+    let mut out = atan(y / x);
+    let other = !x.simd_gt(0.0);
+    if other.any() {
+        let bits = other.to_bitmask();
+        let arr = out.as_mut_array();
+        for (k, slot) in arr.iter_mut().enumerate() {
+            if bits & (1 << k) != 0 {
+                *slot = super::atan2(y.as_array()[k], x.as_array()[k]);
+            }
+        }
+    }
+    out
+}
+
+/// [`delta_mu`](super::delta_mu) in every lane.
+#[inline(always)]
+pub(crate) fn delta_mu(c: F, w: F, alpha_t: F, mu: F) -> F {
+    (-c - alpha_t * mu) / (w + alpha_t)
+}
+
+/// [`ForcedRotation::scale`] in every lane: 1 wherever the envelope's
+/// lower bound already lets the whole turn through (by far the common
+/// case), the scalar answer elsewhere.
+#[inline(always)]
+pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
+    let whole = full.simd_le(0.0)
+        | (violation.simd_gt(0.0)
+            & (full * violation).simd_le(F::splat(rot.phi) * (violation - F::splat(rot.h))));
+    if whole.all() {
+        return F::ONE;
+    }
+    let (v, f) = (violation.to_array(), full.to_array());
+    F::new(each(|k| rot.scale(v[k], f[k])))
+}
+
+/// `f(item)` of each of a chunk's constraints, in its lane.
+#[inline(always)]
+pub(crate) fn field<T: Copy>(items: &[T; LANES], f: impl Fn(T) -> f32) -> F {
+    F::new(each(|k| f(items[k])))
+}
+
+/// `f(m)` of each of a chunk's multipliers, in its lane.
+#[inline(always)]
+pub(crate) fn load_with<M>(mu: &[M; LANES], f: impl Fn(&M) -> f32) -> F {
+    F::new(each(|k| f(&mu[k])))
+}
+
+/// Writes the lanes of `v` back to a chunk's multipliers.
+#[inline(always)]
+pub(crate) fn store(v: F, mu: &mut [f32; LANES]) {
+    *mu = v.to_array();
+}
+
+/// `f32::clamp(v, -1, 1)` in every lane (NaN stays NaN).
+#[inline(always)]
+pub(crate) fn clamp_unit(v: F) -> F {
+    let v = v.simd_lt(-1.0).select(F::splat(-1.0), v);
+    v.simd_gt(1.0).select(F::ONE, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lanes_match_the_scalar_functions_bit_for_bit() {
+        let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
+        for i in 0..2000 {
+            let t = (i as f32 - 1000.0) * 0.0037 + 1e-4;
+            let ts = F::new([t, -t, t * 0.01, t * 40.0]);
+            let a = atan(ts).to_array();
+            let y = F::new([t, t, -t, 0.3]);
+            let x = F::new([1.0, -0.5, 0.0, t]);
+            let b = atan2(y, x).to_array();
+            let s = scale(&rot, ts.abs(), F::new([0.1, 2.0, 0.0, t.abs()])).to_array();
+            for k in 0..LANES {
+                assert_eq!(
+                    a[k].to_bits(),
+                    super::super::atan(ts.to_array()[k]).to_bits()
+                );
+                let (yk, xk) = (y.to_array()[k], x.to_array()[k]);
+                assert_eq!(b[k].to_bits(), super::super::atan2(yk, xk).to_bits());
+                let (v, f) = (ts.abs().to_array()[k], [0.1, 2.0, 0.0, t.abs()][k]);
+                assert_eq!(s[k].to_bits(), rot.scale(v, f).to_bits());
+            }
+        }
+        let q = Quat::from_xyzw(0.3, -0.2, 0.5, 0.7).normalize();
+        let r = Vec3::new(0.01, -0.02, 0.015);
+        let q4 = Q4 {
+            x: F::splat(q.x),
+            y: F::splat(q.y),
+            z: F::splat(q.z),
+            w: F::splat(q.w),
+        };
+        let r4 = V3 {
+            x: F::splat(r.x),
+            y: F::splat(r.y),
+            z: F::splat(r.z),
+        };
+        let (t, ok) = turn_by(q4, r4);
+        assert!(ok.all());
+        let want = crate::solver::cloth::turn_by(q, r);
+        assert_eq!(
+            t.lane(2).to_array().map(f32::to_bits),
+            want.to_array().map(f32::to_bits)
+        );
+        let n = crate::solver::cloth::normal_of(q);
+        assert_eq!(
+            q4.normal().lane(1).to_array().map(f32::to_bits),
+            n.to_array().map(f32::to_bits)
+        );
+    }
+}
