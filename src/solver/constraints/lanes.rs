@@ -1,11 +1,12 @@
-//! Four constraints at a time: SIMD lanes over a colour batch.
+//! Eight constraints at a time: SIMD lanes over a colour batch.
 //!
 //! The kernels are chains of dependent operations (a length, a reciprocal,
 //! an angle, a division for `Δμ`, a turn), so one constraint at a time
 //! leaves the core waiting on latencies. The constraints of a colour batch
 //! share no free particle, so [`LANES`] of them can be projected side by
 //! side: their inputs are gathered into lanes ([`V3`], [`Q4`], one
-//! [`wide::f32x4`] per component), every operation runs on all lanes at
+//! [`wide::f32x8`] per component: two SSE registers, or one AVX register
+//! where the build enables AVX), every operation runs on all lanes at
 //! once, and the results are scattered back constraint by constraint.
 //!
 //! **Same result as one at a time.** Every lane runs exactly the operations,
@@ -22,19 +23,19 @@
 //! written (see [`live`] and [`project_batches`](super::project_batches)).
 
 use glam::{Quat, Vec3};
-use wide::f32x4;
+use wide::f32x8;
 
 use super::{ATAN_POLY, Particles, Recorder, shift, turn};
 use crate::solver::forced_rotation::ForcedRotation;
 
 /// Constraints projected side by side.
-pub(crate) const LANES: usize = 4;
+pub(crate) const LANES: usize = 8;
 
 /// One `f32` per lane.
-pub(crate) type F = f32x4;
+pub(crate) type F = f32x8;
 
 /// A lane mask: all bits set where true.
-pub(crate) type Mask = f32x4;
+pub(crate) type Mask = f32x8;
 
 /// The particle indices of one role (say, every constraint's first end)
 /// across a chunk of [`LANES`] constraints.
@@ -46,7 +47,7 @@ pub(crate) struct Chunk {
 /// `[f(0), f(1), …]`, one per lane.
 #[inline(always)]
 pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
-    [f(0), f(1), f(2), f(3)]
+    [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)]
 }
 
 /// The mask of the first `live` lanes.
@@ -403,21 +404,21 @@ mod tests {
         let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
         for i in 0..2000 {
             let t = (i as f32 - 1000.0) * 0.0037 + 1e-4;
-            let ts = F::new([t, -t, t * 0.01, t * 40.0]);
-            let a = atan(ts).to_array();
-            let y = F::new([t, t, -t, 0.3]);
-            let x = F::new([1.0, -0.5, 0.0, t]);
-            let b = atan2(y, x).to_array();
-            let s = scale(&rot, ts.abs(), F::new([0.1, 2.0, 0.0, t.abs()])).to_array();
+            // Small, moderate and steep arguments; every quadrant; Eq. 3
+            // letting a turn through, cutting it, and nothing asked.
+            let ts = each(|k| t * [1.0, -1.0, 0.01, 40.0][k % 4] + k as f32 * 1e-3);
+            let (y, x) = (
+                each(|k| [t, t, -t, 0.3][k % 4]),
+                each(|k| [1.0, -0.5, 0.0, t][k % 4]),
+            );
+            let full = each(|k| [0.1, 2.0, 0.0, t.abs()][k % 4]);
+            let a = atan(F::new(ts)).to_array();
+            let b = atan2(F::new(y), F::new(x)).to_array();
+            let s = scale(&rot, F::new(ts.map(f32::abs)), F::new(full)).to_array();
             for k in 0..LANES {
-                assert_eq!(
-                    a[k].to_bits(),
-                    super::super::atan(ts.to_array()[k]).to_bits()
-                );
-                let (yk, xk) = (y.to_array()[k], x.to_array()[k]);
-                assert_eq!(b[k].to_bits(), super::super::atan2(yk, xk).to_bits());
-                let (v, f) = (ts.abs().to_array()[k], [0.1, 2.0, 0.0, t.abs()][k]);
-                assert_eq!(s[k].to_bits(), rot.scale(v, f).to_bits());
+                assert_eq!(a[k].to_bits(), super::super::atan(ts[k]).to_bits());
+                assert_eq!(b[k].to_bits(), super::super::atan2(y[k], x[k]).to_bits());
+                assert_eq!(s[k].to_bits(), rot.scale(ts[k].abs(), full[k]).to_bits());
             }
         }
         let q = Quat::from_xyzw(0.3, -0.2, 0.5, 0.7).normalize();
