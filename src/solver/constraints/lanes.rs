@@ -312,33 +312,30 @@ pub(crate) fn atan(t: F) -> F {
     let t2 = t * t;
     let small =
         t * (F::ONE - t2 * (F::splat(1.0 / 3.0) - t2 * (F::splat(0.2) - t2 * F::splat(1.0 / 7.0))));
-    let z = a * a;
+    // Beyond 1, `π/2 − atan(1/a)`: one polynomial serves both ranges.
+    let steep = a.simd_gt(1.0);
+    let u = steep.select(F::ONE / a, a);
+    let z = u * u;
     let z2 = z * z;
     let c = ATAN_POLY.map(F::splat);
     let low = (c[0] + c[1] * z) + (c[2] + c[3] * z) * z2;
     let high = (c[4] + c[5] * z) + (c[6] + c[7] * z) * z2;
-    let poly = (a * (low + high * (z2 * z2))).copysign(t);
-    let mut out = a.simd_lt(0.05).select(small, poly);
-    let steep = a.simd_gt(1.0);
-    if steep.any() {
-        let bits = steep.to_bitmask();
-        let arr = out.as_mut_array();
-        for (k, slot) in arr.iter_mut().enumerate() {
-            if bits & (1 << k) != 0 {
-                *slot = super::atan(t.as_array()[k]);
-            }
-        }
-    }
-    out
+    let poly = u * (low + high * (z2 * z2));
+    let wide = steep.select(F::FRAC_PI_2 - poly, poly).copysign(t);
+    a.simd_lt(0.05).select(small, wide)
 }
 
-/// [`atan2`](super::atan2) in every lane.
+/// [`atan2`](super::atan2) in every lane: in lanes for `x ≠ 0`, alone for
+/// the rest (`x = 0` or NaN).
 #[inline(always)]
 pub(crate) fn atan2(y: F, x: F) -> F {
-    let mut out = atan(y / x);
-    let other = !x.simd_gt(0.0);
-    if other.any() {
-        let bits = other.to_bitmask();
+    let r = y / x;
+    let right = x.simd_gt(0.0);
+    let angle = atan(right.select(r, r.abs()));
+    let mut out = right.select(angle, (F::PI - angle).copysign(y));
+    let odd = !(right | x.simd_lt(0.0));
+    if odd.any() {
+        let bits = odd.to_bitmask();
         let arr = out.as_mut_array();
         for (k, slot) in arr.iter_mut().enumerate() {
             if bits & (1 << k) != 0 {
