@@ -42,8 +42,8 @@ pub(crate) fn project<R: Recorder>(
         lanes::load_with(mu, |m| m[1]),
     ];
     let live = lanes::live(live);
-    one_side(p, &a, &b, &mut m[0], live, alpha_t, rot, rec);
-    one_side(p, &b, &a, &mut m[1], live, alpha_t, rot, rec);
+    one_side(p, (&a, &b), &mut m[0], live, alpha_t, rot, rec);
+    one_side(p, (&b, &a), &mut m[1], live, alpha_t, rot, rec);
     let (m0, m1) = (m[0].to_array(), m[1].to_array());
     *mu = lanes::each(|k| [m0[k], m1[k]]);
 }
@@ -86,8 +86,7 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
 #[inline(always)]
 fn one_side<R: Recorder>(
     p: &Particles,
-    e: &Chunk,
-    o: &Chunk,
+    (e, o): (&Chunk, &Chunk),
     mu: &mut F,
     live: lanes::Mask,
     alpha_t: F,
