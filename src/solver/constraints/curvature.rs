@@ -65,10 +65,7 @@ pub(crate) fn project<R: Recorder>(
     let c = F::splat(4.0) * len / rest;
     let across = across * (F::ONE / len);
     let alpha_t = F::splat(alpha_t) / lanes::field(triples, |t| t.aspect);
-    let mut mus = [
-        lanes::load_with(mu, |m| m[0]),
-        lanes::load_with(mu, |m| m[1]),
-    ];
+    let mut mus = lanes::load_pairs(mu);
 
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
@@ -107,8 +104,7 @@ pub(crate) fn project<R: Recorder>(
         a.turn(p, qa, e * (-ba * d), on & ba.simd_gt(0.0), rec);
         b.turn(p, qb, e * (bb * d), on & bb.simd_gt(0.0), rec);
     }
-    let (m0, m1) = (mus[0].to_array(), mus[1].to_array());
-    *mu = lanes::each(|k| [m0[k], m1[k]]);
+    lanes::store_pairs(mus, mu);
 }
 
 /// The sagitta angle `C = 2 |d⊥| / L` of a run (`L` half the run's rest

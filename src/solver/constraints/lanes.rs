@@ -385,6 +385,20 @@ pub(crate) fn store(v: F, mu: &mut [f32; LANES]) {
     *mu = v.to_array();
 }
 
+/// A chunk's pairs of multipliers (a constraint with two parts), as two
+/// lane values.
+#[inline(always)]
+pub(crate) fn load_pairs(mu: &[[f32; 2]; LANES]) -> [F; 2] {
+    [load_with(mu, |m| m[0]), load_with(mu, |m| m[1])]
+}
+
+/// Writes two lane values back to a chunk's pairs of multipliers.
+#[inline(always)]
+pub(crate) fn store_pairs(v: [F; 2], mu: &mut [[f32; 2]; LANES]) {
+    let (first, second) = (v[0].to_array(), v[1].to_array());
+    *mu = each(|k| [first[k], second[k]]);
+}
+
 /// `f32::clamp(v, -1, 1)` in every lane (NaN stays NaN).
 #[inline(always)]
 pub(crate) fn clamp_unit(v: F) -> F {

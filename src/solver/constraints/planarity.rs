@@ -37,15 +37,11 @@ pub(crate) fn project<R: Recorder>(
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
     let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
-    let mut m = [
-        lanes::load_with(mu, |m| m[0]),
-        lanes::load_with(mu, |m| m[1]),
-    ];
+    let mut m = lanes::load_pairs(mu);
     let live = lanes::live(live);
     one_side(p, (&a, &b), &mut m[0], live, alpha_t, rot, rec);
     one_side(p, (&b, &a), &mut m[1], live, alpha_t, rot, rec);
-    let (m0, m1) = (m[0].to_array(), m[1].to_array());
-    *mu = lanes::each(|k| [m0[k], m1[k]]);
+    lanes::store_pairs(m, mu);
 }
 
 /// The angle `α = asin(n · ŝ)` of the edge `e → o` out of `e`'s tangent
