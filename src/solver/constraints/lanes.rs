@@ -379,6 +379,12 @@ pub(crate) fn load_with<M>(mu: &[M; LANES], f: impl Fn(&M) -> f32) -> F {
     F::new(each(|k| f(&mu[k])))
 }
 
+/// A chunk's multipliers, one per lane.
+#[inline(always)]
+pub(crate) fn load(mu: &[f32; LANES]) -> F {
+    F::new(*mu)
+}
+
 /// Writes the lanes of `v` back to a chunk's multipliers.
 #[inline(always)]
 pub(crate) fn store(v: F, mu: &mut [f32; LANES]) {

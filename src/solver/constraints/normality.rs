@@ -52,7 +52,7 @@ pub(crate) fn project<R: Recorder>(
     let odd = on & !sin.simd_gt(1e-9);
     if odd.any() {
         let bits = odd.to_bitmask();
-        for k in (0..lanes::LANES).filter(|k| bits & (1 << k) != 0) {
+        for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
             let edge = p.x(b.at(k)) - p.x(a.at(k));
             match axis_angle(na.lane(k), nb.lane(k), edge) {
                 Some((ax, an)) => {
@@ -63,7 +63,7 @@ pub(crate) fn project<R: Recorder>(
             }
         }
     }
-    let mut m = lanes::load_with(mu, |m| *m);
+    let mut m = lanes::load(mu);
     let mut d = lanes::delta_mu(
         angle,
         w,

@@ -47,7 +47,7 @@ pub(crate) fn project<R: Recorder>(
     }
     let rest = lanes::field(pairs, |c| c.rest);
     let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
-    let m = lanes::load_with(mu, |m| *m);
+    let m = lanes::load(mu);
     let d = lanes::delta_mu(len - rest, w, alpha_t, m);
     lanes::store(on.select(m + d, m), mu);
     let dir = s * (d * (F::ONE / len));
@@ -93,7 +93,7 @@ pub(crate) fn project_tethers<R: Recorder>(
     let w = i.gather(p.inv_mass);
     let rest = lanes::field(tethers, |t| t.rest);
     let alpha_t = F::splat(alpha_t) * lanes::field(tethers, |t| t.span);
-    let m = lanes::load_with(mu, |m| *m);
+    let m = lanes::load(mu);
     // One-sided: the multiplier may only pull (μ ≤ 0).
     let next = (m + lanes::delta_mu(len - rest, w, alpha_t, m)).min(F::ZERO);
     let d = next - m;
