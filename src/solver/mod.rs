@@ -545,6 +545,7 @@ impl Solver {
             self.find_tangles();
         }
         let t = self.diagnostics.is_some().then(Instant::now);
+        let threads = self.threads();
         update::integrate(
             &mut self.state,
             &self.inv_mass,
@@ -558,6 +559,7 @@ impl Solver {
             self.spec.density,
             self.params.substep_damping(),
             dt,
+            threads,
         );
         self.drive_attachments();
         self.check_finite("update")?;
@@ -584,7 +586,6 @@ impl Solver {
             self.self_contacts.set.len(),
         );
         let compliance = Compliance::new(&self.params.weights, dt);
-        let threads = self.threads();
         let p = Particles::new(
             &mut self.state.position,
             &mut self.state.orientation,

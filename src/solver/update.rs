@@ -27,6 +27,8 @@ use glam::{Quat, Vec3};
 use super::{
     cloth::{ClothState, normal_of, rotate},
     collision::Pose,
+    constraints::Shared,
+    team,
 };
 
 /// What acts on the cloth from outside, constant over one step.
@@ -93,7 +95,9 @@ pub(crate) struct Reference<'a> {
 pub(crate) const FREE: u32 = u32::MAX;
 
 /// Advances every free particle by one substep of length `dt`; pinned
-/// particles (no mass, free orientation) only turn.
+/// particles (no mass, free orientation) only turn. Each particle moves on
+/// its own, so `threads` threads each take a contiguous share and the
+/// result is the same for any number of them.
 ///
 /// Damping keeps a fraction `damping` of each particle's velocity *relative
 /// to its reference motion*: the rigid motion of the body it hangs from
@@ -111,9 +115,8 @@ pub(crate) fn integrate(
     areal_density: f32,
     damping: f32,
     dt: f32,
+    threads: usize,
 ) {
-    let dt2 = dt * dt;
-    let with_wind = env.air_density > 0.0 && (env.drag_normal > 0.0 || env.drag_tangent > 0.0);
     let mean = mean_displacement(state, inv_mass, reference.body_of);
     // Each body's rigid motion over the last substep, `to ∘ from⁻¹`, once.
     let motions: Vec<Pose> = reference
@@ -125,30 +128,88 @@ pub(crate) fn integrate(
             Pose::new(to.translation - rotation * from.translation, rotation)
         })
         .collect();
-    for i in 0..state.len() {
-        let q = state.orientation[i];
-        let carrier = motions.get(reference.body_of[i] as usize);
-        if inv_mass[i] > 0.0 {
-            let x = state.position[i];
-            let prev = state.prev_position[i];
-            let disp = x - prev;
-            let carried = carrier.map_or(mean, |m| m.transform_point(prev) - prev);
-            let mut acc = env.gravity;
-            if with_wind {
-                acc += wind_acceleration(env, areal_density, normal_of(q), disp / dt, dt);
+    let step = Step {
+        env,
+        with_wind: env.air_density > 0.0 && (env.drag_normal > 0.0 || env.drag_tangent > 0.0),
+        areal_density,
+        damping,
+        dt,
+        mean,
+        motions: &motions,
+    };
+    let n = state.len();
+    let (x, prev_x) = (
+        Shared::new(&mut state.position),
+        Shared::new(&mut state.prev_position),
+    );
+    let (q, prev_q) = (
+        Shared::new(&mut state.orientation),
+        Shared::new(&mut state.prev_orientation),
+    );
+    team::run(threads, |crew| {
+        let mine = crew.share(n);
+        // SAFETY: the shares are disjoint, and a particle's update reads and
+        // writes only that particle.
+        let (x, prev_x, q, prev_q) = unsafe {
+            (
+                x.slice(mine.clone()),
+                prev_x.slice(mine.clone()),
+                q.slice(mine.clone()),
+                prev_q.slice(mine.clone()),
+            )
+        };
+        for (k, i) in mine.enumerate() {
+            let carrier = step.motions.get(reference.body_of[i] as usize);
+            if inv_mass[i] > 0.0 {
+                step.translate(carrier, q[k], &mut x[k], &mut prev_x[k]);
             }
-            state.prev_position[i] = x;
-            state.position[i] = x + carried + (disp - carried) * damping + acc * dt2;
-        }
-        if inv_inertia[i] > 0.0 {
-            let carried = carrier.map_or(Quat::IDENTITY, |m| m.rotation);
-            let mut relative = q * state.prev_orientation[i].conjugate() * carried.conjugate();
-            if relative.w < 0.0 {
-                relative = -relative;
+            if inv_inertia[i] > 0.0 {
+                step.rotate(carrier, &mut q[k], &mut prev_q[k]);
             }
-            state.prev_orientation[i] = q;
-            state.orientation[i] = rotate(carried * q, rotation_vector(relative) * damping);
         }
+    });
+}
+
+/// What every particle's update reads.
+struct Step<'a> {
+    env: &'a Environment,
+    with_wind: bool,
+    areal_density: f32,
+    damping: f32,
+    dt: f32,
+    /// The cloth's mean displacement, for particles that follow no body.
+    mean: Vec3,
+    /// Each body's rigid motion over the last substep.
+    motions: &'a [Pose],
+}
+
+impl Step<'_> {
+    /// Moves a free particle with orientation `q`, carried by `carrier`.
+    #[inline]
+    fn translate(&self, carrier: Option<&Pose>, q: Quat, x: &mut Vec3, prev: &mut Vec3) {
+        let (now, before) = (*x, *prev);
+        let disp = now - before;
+        let carried = carrier.map_or(self.mean, |m| m.transform_point(before) - before);
+        let mut acc = self.env.gravity;
+        if self.with_wind {
+            let v = disp / self.dt;
+            acc += wind_acceleration(self.env, self.areal_density, normal_of(q), v, self.dt);
+        }
+        *prev = now;
+        *x = now + carried + (disp - carried) * self.damping + acc * (self.dt * self.dt);
+    }
+
+    /// Turns a particle with inertia, carried by `carrier`.
+    #[inline]
+    fn rotate(&self, carrier: Option<&Pose>, q: &mut Quat, prev: &mut Quat) {
+        let now = *q;
+        let carried = carrier.map_or(Quat::IDENTITY, |m| m.rotation);
+        let mut relative = now * prev.conjugate() * carried.conjugate();
+        if relative.w < 0.0 {
+            relative = -relative;
+        }
+        *prev = now;
+        *q = rotate(carried * now, rotation_vector(relative) * self.damping);
     }
 }
 
