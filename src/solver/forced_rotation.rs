@@ -79,7 +79,7 @@ impl ForcedRotation {
             // exp(−80) ≈ 2e-35: nothing is left of the correction.
             return 0.0;
         } else {
-            self.phi * (-ratio).exp()
+            self.phi * exp_neg(ratio)
         };
         full.min(envelope)
     }
@@ -104,4 +104,47 @@ impl ForcedRotation {
         let angle = self.limit(violation, full);
         if angle >= full { 1.0 } else { angle / full }
     }
+}
+
+/// `exp(−r)` for `0 ≤ r ≤ 87`, without a libm call: `2^k · e^f` with `k`
+/// the integer nearest `−r / ln 2` and `|f| ≤ ln 2 / 2`, `e^f` by its Taylor
+/// polynomial of degree 7 (truncation below 1e-8, relative error within
+/// 2 ulp). Pure IEEE arithmetic, so it is the same on every machine and
+/// the SIMD lanes reproduce it bit for bit ([`lanes::exp_neg`]).
+///
+/// [`lanes::exp_neg`]: super::constraints::lanes::exp_neg
+#[inline]
+pub(crate) fn exp_neg(r: f32) -> f32 {
+    let t = -r * std::f32::consts::LOG2_E + EXP_SHIFTER;
+    let k = t - EXP_SHIFTER;
+    let f = (-r - k * EXP_LN2_HI) - k * EXP_LN2_LO;
+    let two_k = f32::from_bits(((t.to_bits() as i32 - EXP_SHIFTER_BITS + 127) << 23) as u32);
+    exp_poly(f, |v| v) * two_k
+}
+
+/// Adding `1.5 · 2^23` rounds an `f32` of magnitude below `2^22` to an
+/// integer, which is then the low bits of the sum's representation.
+pub(crate) const EXP_SHIFTER: f32 = 12_582_912.0;
+/// [`EXP_SHIFTER`]'s bits.
+pub(crate) const EXP_SHIFTER_BITS: i32 = 0x4b40_0000;
+/// `ln 2` in two parts: the first exact in 9 bits (so `k · EXP_LN2_HI` is
+/// exact), the second the rest.
+pub(crate) const EXP_LN2_HI: f32 = 0.693_359_4;
+/// See [`EXP_LN2_HI`].
+pub(crate) const EXP_LN2_LO: f32 = -2.121_944_4e-4;
+
+/// `e^f` for `|f| ≤ ln 2 / 2`: `Σ fⁿ/n!` up to `n = 7`, by Horner's scheme,
+/// in `f32` or in lanes (`c` makes a constant).
+#[inline(always)]
+pub(crate) fn exp_poly<T>(f: T, c: impl Fn(f32) -> T) -> T
+where
+    T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Output = T>,
+{
+    let p = c(1.0 / 720.0) + f * (c(1.0 / 5040.0));
+    let p = c(1.0 / 120.0) + f * p;
+    let p = c(1.0 / 24.0) + f * p;
+    let p = c(1.0 / 6.0) + f * p;
+    let p = c(0.5) + f * p;
+    let p = c(1.0) + f * p;
+    c(1.0) + f * p
 }

@@ -34,6 +34,9 @@ pub(crate) const LANES: usize = 8;
 /// One `f32` per lane.
 pub(crate) type F = f32x8;
 
+/// One `i32` per lane.
+type I = wide::i32x8;
+
 /// A lane mask: all bits set where true.
 pub(crate) type Mask = f32x8;
 
@@ -142,6 +145,49 @@ impl Chunk {
     }
 }
 
+/// A chunk's positions held in lanes while a kernel moves them more than
+/// once, written back once at the end ([`Held::put`]). Each move is the
+/// same addition [`Chunk::shift`] makes in memory, so the result is too.
+#[derive(Clone, Copy)]
+pub(crate) struct Held {
+    pub x: V3,
+    /// The lanes moved so far.
+    moved: Mask,
+}
+
+impl Held {
+    /// The chunk's positions.
+    #[inline(always)]
+    pub(crate) fn of(p: &Particles, chunk: &Chunk) -> Self {
+        Self {
+            x: chunk.x(p),
+            moved: F::ZERO,
+        }
+    }
+
+    /// Moves each lane's position by its `dx`, in the lanes of `mask`.
+    #[inline(always)]
+    pub(crate) fn shift<R: Recorder>(&mut self, chunk: &Chunk, dx: V3, mask: Mask, rec: &mut R) {
+        self.x = V3::select(mask, self.x + dx, self.x);
+        self.moved |= mask;
+        if R::ON {
+            let bits = mask.to_bitmask();
+            for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
+                rec.moved(chunk.at(k), dx.lane(k));
+            }
+        }
+    }
+
+    /// Writes the moved lanes' positions back.
+    #[inline(always)]
+    pub(crate) fn put(&self, p: &Particles, chunk: &Chunk) {
+        let bits = self.moved.to_bitmask();
+        for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
+            p.set_x(chunk.at(k), self.x.lane(k));
+        }
+    }
+}
+
 /// A vector per lane.
 #[derive(Clone, Copy)]
 pub(crate) struct V3 {
@@ -176,6 +222,16 @@ impl V3 {
         self.x.as_mut_array()[k] = v.x;
         self.y.as_mut_array()[k] = v.y;
         self.z.as_mut_array()[k] = v.z;
+    }
+
+    /// `a` in the lanes of `mask`, `b` elsewhere.
+    #[inline(always)]
+    pub(crate) fn select(mask: Mask, a: Self, b: Self) -> Self {
+        Self {
+            x: mask.select(a.x, b.x),
+            y: mask.select(a.y, b.y),
+            z: mask.select(a.z, b.z),
+        }
     }
 
     /// As glam's `Vec3::dot`.
@@ -352,19 +408,42 @@ pub(crate) fn delta_mu(c: F, w: F, alpha_t: F, mu: F) -> F {
     (-c - alpha_t * mu) / (w + alpha_t)
 }
 
-/// [`ForcedRotation::scale`] in every lane: 1 wherever the envelope's
-/// lower bound already lets the whole turn through (by far the common
-/// case), the scalar answer elsewhere.
+/// [`ForcedRotation::scale`] in every lane, case by case as the scalar
+/// code (`limit`, then the fraction).
 #[inline(always)]
 pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
-    let whole = full.simd_le(0.0)
-        | (violation.simd_gt(0.0)
-            & (full * violation).simd_le(F::splat(rot.phi) * (violation - F::splat(rot.h))));
+    let (phi, h) = (F::splat(rot.phi), F::splat(rot.h));
+    // Nothing asked (or NaN), or the envelope's lower bound lets it all
+    // through: the common case.
+    let whole = !full.simd_gt(0.0)
+        | (violation.simd_gt(0.0) & (full * violation).simd_le(phi * (violation - h)));
     if whole.all() {
         return F::ONE;
     }
-    let (v, f) = (violation.to_array(), full.to_array());
-    F::new(each(|k| rot.scale(v[k], f[k])))
+    let ratio = h / violation;
+    let envelope = ratio.simd_le(0.0).select(phi, phi * exp_neg(ratio));
+    let mut angle = ratio.simd_ge(80.0).select(F::ZERO, full.min(envelope));
+    // No violation (or NaN): the envelope is closed (h > 0) or Φ (h = 0).
+    let closed = if rot.h > 0.0 { F::ZERO } else { full.min(phi) };
+    angle = violation.simd_gt(0.0).select(angle, closed);
+    let fraction = angle.simd_ge(full).select(F::ONE, angle / full);
+    whole.select(F::ONE, fraction)
+}
+
+/// [`exp_neg`](crate::solver::forced_rotation::exp_neg) in every lane,
+/// operation for operation.
+#[inline(always)]
+pub(crate) fn exp_neg(r: F) -> F {
+    use crate::solver::forced_rotation::{
+        EXP_LN2_HI, EXP_LN2_LO, EXP_SHIFTER, EXP_SHIFTER_BITS, exp_poly,
+    };
+    let shifter = F::splat(EXP_SHIFTER);
+    let t = -r * F::splat(std::f32::consts::LOG2_E) + shifter;
+    let k = t - shifter;
+    let f = (-r - k * F::splat(EXP_LN2_HI)) - k * F::splat(EXP_LN2_LO);
+    let bits: I = bytemuck::cast(t);
+    let two_k: F = bytemuck::cast((bits - I::splat(EXP_SHIFTER_BITS - 127)) << 23);
+    exp_poly(f, F::splat) * two_k
 }
 
 /// `f(item)` of each of a chunk's constraints, in its lane.
@@ -463,5 +542,59 @@ mod tests {
             q4.normal().lane(1).to_array().map(f32::to_bits),
             n.to_array().map(f32::to_bits)
         );
+    }
+
+    #[test]
+    fn exp_and_eq3_in_lanes_match_the_scalar_code_and_the_standard_library() {
+        use crate::solver::forced_rotation::exp_neg as scalar_exp_neg;
+        let mut worst = 0.0f64;
+        let n = 20_000;
+        for i in 0..n {
+            let r = each(|k| (i * LANES + k) as f32 * 87.0 / (n * LANES) as f32);
+            let e = exp_neg(F::new(r)).to_array();
+            for k in 0..LANES {
+                assert_eq!(
+                    e[k].to_bits(),
+                    scalar_exp_neg(r[k]).to_bits(),
+                    "exp(-{})",
+                    r[k]
+                );
+                let want = (-f64::from(r[k])).exp();
+                worst = worst.max(((f64::from(e[k]) - want) / want).abs());
+            }
+        }
+        assert!(worst < 2.5e-7, "largest relative error {worst}");
+        let rots = [(0.7, 1e-4), (0.7, 0.0), (3.0, 0.05), (0.0, 1e-4)];
+        for (phi, h) in rots {
+            for i in 0..1000 {
+                // Violations from 1e-8 to 1e2 rad; turns asked of every
+                // size; and no violation, a negative one, NaN, nothing asked.
+                let v = each(|k| 10f32.powf(-8.0 + (i * LANES + k) as f32 * 1.25e-3));
+                let v = each(|k| [v[k], v[k], v[k], [0.0, -1.0, f32::NAN, v[k]][i % 4]][k % 4]);
+                let full = each(|k| v[k].abs() * [1.0, 0.3, 30.0, 1.0][k % 4]);
+                let full = each(|k| {
+                    if k == 5 {
+                        [0.0, f32::NAN, -1.0, 2.0][i % 4]
+                    } else {
+                        full[k]
+                    }
+                });
+                let s = scale(&phi_h(phi, h), F::new(v), F::new(full)).to_array();
+                for k in 0..LANES {
+                    let want = phi_h(phi, h).scale(v[k], full[k]);
+                    assert_eq!(
+                        s[k].to_bits(),
+                        want.to_bits(),
+                        "v {} full {}",
+                        v[k],
+                        full[k]
+                    );
+                }
+            }
+        }
+    }
+
+    fn phi_h(phi: f32, h: f32) -> ForcedRotation {
+        ForcedRotation { phi, h }
     }
 }

@@ -39,9 +39,35 @@ pub(crate) fn project<R: Recorder>(
     let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
     let mut m = lanes::load_pairs(mu);
     let live = lanes::live(live);
-    one_side(p, (&a, &b), &mut m[0], live, alpha_t, rot, rec);
-    one_side(p, (&b, &a), &mut m[1], live, alpha_t, rot, rec);
+    // Both sides move both ends: the positions stay in lanes between them
+    // and are written once.
+    let (mut ea, mut eb) = (End::of(p, &a), End::of(p, &b));
+    one_side(p, (&mut ea, &mut eb), &mut m[0], live, alpha_t, rot, rec);
+    one_side(p, (&mut eb, &mut ea), &mut m[1], live, alpha_t, rot, rec);
     lanes::store_pairs(m, mu);
+    ea.x.put(p, &a);
+    eb.x.put(p, &b);
+}
+
+/// One end of a chunk's edges: its particles, positions (held in lanes),
+/// inverse masses and inverse inertias.
+struct End<'c> {
+    chunk: &'c Chunk,
+    x: lanes::Held,
+    w: F,
+    beta: F,
+}
+
+impl<'c> End<'c> {
+    #[inline(always)]
+    fn of(p: &Particles, chunk: &'c Chunk) -> Self {
+        Self {
+            chunk,
+            x: lanes::Held::of(p, chunk),
+            w: chunk.gather(p.inv_mass),
+            beta: chunk.gather(p.inv_inertia),
+        }
+    }
 }
 
 /// The angle `α = asin(n · ŝ)` of the edge `e → o` out of `e`'s tangent
@@ -82,16 +108,16 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
 #[inline(always)]
 fn one_side<R: Recorder>(
     p: &Particles,
-    (e, o): (&Chunk, &Chunk),
+    (e, o): (&mut End, &mut End),
     mu: &mut F,
     live: lanes::Mask,
     alpha_t: F,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let q = e.q(p);
+    let q = e.chunk.q(p);
     let n = q.normal();
-    let s = o.x(p) - e.x(p);
+    let s = o.x.x - e.x.x;
     let len = s.length();
     let inv_len = F::ONE / len;
     let dir = s * inv_len;
@@ -99,11 +125,7 @@ fn one_side<R: Recorder>(
     let axis = n.cross(dir);
     let cos = axis.length();
     let inv_cos = F::ONE / cos;
-    let (we, wo, be) = (
-        e.gather(p.inv_mass),
-        o.gather(p.inv_mass),
-        e.gather(p.inv_inertia),
-    );
+    let (we, wo, be) = (e.w, o.w, e.beta);
     let w = (we + wo) * inv_len * inv_len + be;
     let on = live & !len.simd_le(1e-9) & !cos.simd_le(1e-6) & !w.simd_le(0.0);
     if on.none() {
@@ -116,9 +138,10 @@ fn one_side<R: Recorder>(
     d *= lanes::scale(rot, alpha.abs(), on.select(be * d.abs(), F::ZERO));
     *mu = on.select(*mu + d, *mu);
     let step = across * (d * inv_len);
-    o.shift(p, step * wo, on & wo.simd_gt(0.0), rec);
-    e.shift(p, step * -we, on & we.simd_gt(0.0), rec);
-    e.turn(p, q, axis * (be * d), on & be.simd_gt(0.0), rec);
+    o.x.shift(o.chunk, step * wo, on & wo.simd_gt(0.0), rec);
+    e.x.shift(e.chunk, step * -we, on & we.simd_gt(0.0), rec);
+    e.chunk
+        .turn(p, q, axis * (be * d), on & be.simd_gt(0.0), rec);
 }
 
 /// The larger of the two one-sided angles `|α|` that the projection removes,
