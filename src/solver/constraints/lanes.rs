@@ -12,9 +12,11 @@
 //! **Same result as one at a time.** Every lane runs exactly the operations,
 //! in exactly the order, of the scalar formula it stands for (IEEE addition,
 //! multiplication, division and square root are correctly rounded whether
-//! done in a lane or alone), and the rare branches (a steep arctangent, a
-//! turn past the series' range, Eq. 3 cutting a turn, a degenerate edge) are
-//! handed to the scalar code for the lanes that take them. So a
+//! done in a lane or alone; the arctangent and Eq. 3's exponential are
+//! weft's own arithmetic, repeated here operation for operation), and the
+//! rare branches (a turn past the series' range, a degenerate edge, `atan2`
+//! on the axis) are handed to the scalar code for the lanes that take them.
+//! So a
 //! constraint's correction does not depend on which chunk, lane or thread
 //! projects it, and results stay bit-identical for any number of threads.
 //!
