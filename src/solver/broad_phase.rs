@@ -19,6 +19,7 @@
 //! hash.query(lo, hi, |p| { /* p's cell overlaps [lo, hi] */ });
 //! ```
 
+use super::team;
 use glam::{IVec3, Vec3};
 
 /// Which particles lie near each triangle of a mesh: every particle inside
@@ -64,12 +65,13 @@ impl NearTriangles {
         triangles: &[[u32; 3]],
         (reach, skin): (f32, f32),
         spacing: f32,
+        threads: usize,
     ) {
         let same = self.reach_skin == (reach, skin) && self.start.len() == triangles.len() + 1;
         if same && self.holds(x) {
             return;
         }
-        self.search(x, triangles, (reach, skin), spacing);
+        self.search(x, triangles, (reach, skin), spacing, threads);
     }
 
     /// The particles near triangle `t`, in ascending order.
@@ -112,27 +114,40 @@ impl NearTriangles {
         triangles: &[[u32; 3]],
         (reach, skin): (f32, f32),
         spacing: f32,
+        threads: usize,
     ) {
         let grow = Vec3::splat(reach + skin);
         // Cells a triangle's box (a cell's diagonal, grown) fits in two of
         // along each axis.
         self.hash.build(x, spacing + 2.0 * (reach + skin));
+        // Each thread searches its share of the triangles; the shares,
+        // joined in order, are what one thread would find alone.
+        let hash = &self.hash;
+        let shares = team::run(threads, |crew| {
+            let (mut particles, mut ends) = (Vec::new(), Vec::new());
+            for tri in &triangles[crew.share(triangles.len())] {
+                let corners = tri.map(|k| x[k as usize]);
+                let lo = corners[0].min(corners[1]).min(corners[2]) - grow;
+                let hi = corners[0].max(corners[1]).max(corners[2]) + grow;
+                let from = particles.len();
+                hash.query(lo, hi, |p| {
+                    let xp = x[p as usize];
+                    if xp.cmpge(lo).all() && xp.cmple(hi).all() && !tri.contains(&p) {
+                        particles.push(p);
+                    }
+                });
+                particles[from..].sort_unstable();
+                ends.push(particles.len() as u32);
+            }
+            (particles, ends)
+        });
         self.start.clear();
         self.particles.clear();
         self.start.push(0);
-        for tri in triangles {
-            let corners = tri.map(|k| x[k as usize]);
-            let lo = corners[0].min(corners[1]).min(corners[2]) - grow;
-            let hi = corners[0].max(corners[1]).max(corners[2]) + grow;
-            let from = self.particles.len();
-            self.hash.query(lo, hi, |p| {
-                let xp = x[p as usize];
-                if xp.cmpge(lo).all() && xp.cmple(hi).all() && !tri.contains(&p) {
-                    self.particles.push(p);
-                }
-            });
-            self.particles[from..].sort_unstable();
-            self.start.push(self.particles.len() as u32);
+        for (particles, ends) in shares {
+            let base = self.particles.len() as u32;
+            self.start.extend(ends.into_iter().map(|end| base + end));
+            self.particles.extend(particles);
         }
         self.searched_at.clear();
         self.searched_at.extend_from_slice(x);
@@ -299,18 +314,27 @@ mod tests {
         let (reach, skin) = (0.03, 0.1);
         let (x0, tris) = sheet(|p| p);
         let mut near = NearTriangles::default();
-        near.update(&x0, &tris, (reach, skin), 0.1);
+        near.update(&x0, &tris, (reach, skin), 0.1, 1);
         // Carried far (a car's flag): the same pairs, no new search.
         let (x1, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0));
-        near.update(&x1, &tris, (reach, skin), 0.1);
+        near.update(&x1, &tris, (reach, skin), 0.1, 1);
         assert_eq!(near.searches(), 1);
         // Bent a little more than the skin allows: searched again. Bent a
         // little less: kept. Either way every particle in a box grown by the
         // reach is among the kept pairs, in ascending order.
         for (bend, searches) in [(0.04, 1), (0.2, 2)] {
             let (x, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0 + bend * p.x * p.x));
-            near.update(&x, &tris, (reach, skin), 0.1);
+            near.update(&x, &tris, (reach, skin), 0.1, 2);
             assert_eq!(near.searches(), searches, "bend {bend}");
+            // Two threads search exactly what one does.
+            let mut alone = NearTriangles::default();
+            alone.update(&x, &tris, (reach, skin), 0.1, 1);
+            if searches == 2 {
+                assert_eq!(
+                    (&alone.start, &alone.particles),
+                    (&near.start, &near.particles)
+                );
+            }
             for (k, &t) in tris.iter().enumerate() {
                 let kept = near.of(k);
                 assert!(kept.is_sorted());

@@ -697,6 +697,7 @@ impl Solver {
     fn find_self_contacts(&mut self) {
         let t = self.diagnostics.is_some().then(Instant::now);
         let (dx, dy) = self.spec.spacing();
+        let threads = self.threads();
         self.self_contacts.build(
             &Layers {
                 now: &self.state.position,
@@ -706,6 +707,7 @@ impl Solver {
             &self.topology.triangles,
             &self.spec,
             self.spec.thickness + SELF_CONTACT_SLACK * dx.min(dy),
+            threads,
         );
         if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
             d.families[Family::SelfCollision].time += t.elapsed();

@@ -45,6 +45,7 @@ use glam::Vec3;
 use super::{Particles, Recorder, delta_mu, shift};
 use crate::solver::broad_phase::{NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
+use crate::solver::team;
 use crate::solver::topology::{Batched, Touches};
 
 /// One particle against one triangle, with the side it keeps.
@@ -320,6 +321,7 @@ impl SelfContacts {
         triangles: &[[u32; 3]],
         spec: &ClothSpec,
         reach: f32,
+        threads: usize,
     ) {
         let Layers {
             now,
@@ -327,60 +329,73 @@ impl SelfContacts {
             inv_mass,
         } = *layers;
         let (dx, dy) = spec.spacing();
-        self.near
-            .update(now, triangles, (reach, SKIN * dx.min(dy)), dx.max(dy));
-        let mut found = Vec::new();
-        for (t, &tri) in triangles.iter().enumerate() {
-            let near = self.near.of(t);
-            if near.is_empty() {
-                continue;
-            }
-            let corners = tri.map(|k| now[k as usize]);
-            let Some(t_now) = Triangle::new(corners) else {
-                continue;
-            };
-            let (lo, hi) = bounds(corners, reach);
-            let rim = rim(tri, spec);
-            let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
-            let tangled = |k: u32| self.leaving && self.tangled.get(k as usize) == Some(&true);
-            if tri.into_iter().any(tangled) {
-                continue;
-            }
-            let mut t_start = None;
-            for &p in near {
-                let x = now[p as usize];
-                if !(x.cmpge(lo).all() && x.cmple(hi).all())
-                    || (driven && inv_mass[p as usize] == 0.0)
-                    || tangled(p)
-                {
+        self.near.update(
+            now,
+            triangles,
+            (reach, SKIN * dx.min(dy)),
+            dx.max(dy),
+            threads,
+        );
+        // Each thread checks its share of the triangles; the shares' finds,
+        // joined in order, are what one thread would find alone.
+        let this = &*self;
+        let shares = team::run(threads, |crew| {
+            let mut found = Vec::new();
+            for t in crew.share(triangles.len()) {
+                let tri = triangles[t];
+                let near = this.near.of(t);
+                if near.is_empty() {
                     continue;
                 }
-                // Over the triangle, or near enough to come over it in the
-                // sweeps; a neighbour beside it (a coordinate near −1) is not.
-                let f_now = t_now.foot(x);
-                if !f_now.within(rim, CANDIDATE) {
+                let corners = tri.map(|k| now[k as usize]);
+                let Some(t_now) = Triangle::new(corners) else {
+                    continue;
+                };
+                let (lo, hi) = bounds(corners, reach);
+                let rim = rim(tri, spec);
+                let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
+                let tangled = |k: u32| this.leaving && this.tangled.get(k as usize) == Some(&true);
+                if tri.into_iter().any(tangled) {
                     continue;
                 }
-                let t_start =
-                    t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
-                let Some(t_start) = t_start else {
-                    break;
-                };
-                let side = if t_start.distance(start[p as usize]) >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
-                    found.push(SelfContact {
-                        particle: p,
-                        triangle: tri,
-                        side,
-                        rim,
-                    });
+                let mut t_start = None;
+                for &p in near {
+                    let x = now[p as usize];
+                    if !(x.cmpge(lo).all() && x.cmple(hi).all())
+                        || (driven && inv_mass[p as usize] == 0.0)
+                        || tangled(p)
+                    {
+                        continue;
+                    }
+                    // Over the triangle, or near enough to come over it in the
+                    // sweeps; a neighbour beside it (a coordinate near −1) is not.
+                    let f_now = t_now.foot(x);
+                    if !f_now.within(rim, CANDIDATE) {
+                        continue;
+                    }
+                    let t_start = t_start
+                        .get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
+                    let Some(t_start) = t_start else {
+                        break;
+                    };
+                    let side = if t_start.distance(start[p as usize]) >= 0.0 {
+                        1.0
+                    } else {
+                        -1.0
+                    };
+                    if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
+                        found.push(SelfContact {
+                            particle: p,
+                            triangle: tri,
+                            side,
+                            rim,
+                        });
+                    }
                 }
             }
-        }
+            found
+        });
+        let found = shares.concat();
         self.set = Batched::coloured(found, now.len());
     }
 
