@@ -568,6 +568,7 @@ mod tests {
         assert!(worst < 2.5e-7, "largest relative error {worst}");
         let rots = [(0.7, 1e-4), (0.7, 0.0), (3.0, 0.05), (0.0, 1e-4)];
         for (phi, h) in rots {
+            let rot = ForcedRotation { phi, h };
             for i in 0..1000 {
                 // Violations from 1e-8 to 1e2 rad; turns asked of every
                 // size; and no violation, a negative one, NaN, nothing asked.
@@ -581,9 +582,9 @@ mod tests {
                         full[k]
                     }
                 });
-                let s = scale(&phi_h(phi, h), F::new(v), F::new(full)).to_array();
+                let s = scale(&rot, F::new(v), F::new(full)).to_array();
                 for k in 0..LANES {
-                    let want = phi_h(phi, h).scale(v[k], full[k]);
+                    let want = rot.scale(v[k], full[k]);
                     assert_eq!(
                         s[k].to_bits(),
                         want.to_bits(),
@@ -594,9 +595,5 @@ mod tests {
                 }
             }
         }
-    }
-
-    fn phi_h(phi: f32, h: f32) -> ForcedRotation {
-        ForcedRotation { phi, h }
     }
 }

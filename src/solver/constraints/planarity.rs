@@ -45,15 +45,15 @@ pub(crate) fn project<R: Recorder>(
     one_side(p, (&mut ea, &mut eb), &mut m[0], live, alpha_t, rot, rec);
     one_side(p, (&mut eb, &mut ea), &mut m[1], live, alpha_t, rot, rec);
     lanes::store_pairs(m, mu);
-    ea.x.put(p, &a);
-    eb.x.put(p, &b);
+    ea.pos.put(p, &a);
+    eb.pos.put(p, &b);
 }
 
 /// One end of a chunk's edges: its particles, positions (held in lanes),
 /// inverse masses and inverse inertias.
 struct End<'c> {
     chunk: &'c Chunk,
-    x: lanes::Held,
+    pos: lanes::Held,
     w: F,
     beta: F,
 }
@@ -63,7 +63,7 @@ impl<'c> End<'c> {
     fn of(p: &Particles, chunk: &'c Chunk) -> Self {
         Self {
             chunk,
-            x: lanes::Held::of(p, chunk),
+            pos: lanes::Held::of(p, chunk),
             w: chunk.gather(p.inv_mass),
             beta: chunk.gather(p.inv_inertia),
         }
@@ -117,7 +117,7 @@ fn one_side<R: Recorder>(
 ) {
     let q = e.chunk.q(p);
     let n = q.normal();
-    let s = o.x.x - e.x.x;
+    let s = o.pos.x - e.pos.x;
     let len = s.length();
     let inv_len = F::ONE / len;
     let dir = s * inv_len;
@@ -138,8 +138,8 @@ fn one_side<R: Recorder>(
     d *= lanes::scale(rot, alpha.abs(), on.select(be * d.abs(), F::ZERO));
     *mu = on.select(*mu + d, *mu);
     let step = across * (d * inv_len);
-    o.x.shift(o.chunk, step * wo, on & wo.simd_gt(0.0), rec);
-    e.x.shift(e.chunk, step * -we, on & we.simd_gt(0.0), rec);
+    o.pos.shift(o.chunk, step * wo, on & wo.simd_gt(0.0), rec);
+    e.pos.shift(e.chunk, step * -we, on & we.simd_gt(0.0), rec);
     e.chunk
         .turn(p, q, axis * (be * d), on & be.simd_gt(0.0), rec);
 }
