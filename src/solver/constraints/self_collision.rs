@@ -323,11 +323,7 @@ impl SelfContacts {
         reach: f32,
         threads: usize,
     ) {
-        let Layers {
-            now,
-            start,
-            inv_mass,
-        } = *layers;
+        let now = layers.now;
         let (dx, dy) = spec.spacing();
         self.near.update(
             now,
@@ -342,61 +338,80 @@ impl SelfContacts {
         let shares = team::run(threads, |crew| {
             let mut found = Vec::new();
             for t in crew.share(triangles.len()) {
-                let tri = triangles[t];
-                let near = this.near.of(t);
-                if near.is_empty() {
-                    continue;
-                }
-                let corners = tri.map(|k| now[k as usize]);
-                let Some(t_now) = Triangle::new(corners) else {
-                    continue;
-                };
-                let (lo, hi) = bounds(corners, reach);
-                let rim = rim(tri, spec);
-                let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
-                let tangled = |k: u32| this.leaving && this.tangled.get(k as usize) == Some(&true);
-                if tri.into_iter().any(tangled) {
-                    continue;
-                }
-                let mut t_start = None;
-                for &p in near {
-                    let x = now[p as usize];
-                    if !(x.cmpge(lo).all() && x.cmple(hi).all())
-                        || (driven && inv_mass[p as usize] == 0.0)
-                        || tangled(p)
-                    {
-                        continue;
-                    }
-                    // Over the triangle, or near enough to come over it in the
-                    // sweeps; a neighbour beside it (a coordinate near −1) is not.
-                    let f_now = t_now.foot(x);
-                    if !f_now.within(rim, CANDIDATE) {
-                        continue;
-                    }
-                    let t_start = t_start
-                        .get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
-                    let Some(t_start) = t_start else {
-                        break;
-                    };
-                    let side = if t_start.distance(start[p as usize]) >= 0.0 {
-                        1.0
-                    } else {
-                        -1.0
-                    };
-                    if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
-                        found.push(SelfContact {
-                            particle: p,
-                            triangle: tri,
-                            side,
-                            rim,
-                        });
-                    }
-                }
+                this.pick(t, triangles[t], layers, spec, reach, &mut found);
             }
             found
         });
         let found = shares.concat();
         self.set = Batched::coloured(found, now.len());
+    }
+
+    /// Appends triangle `t`'s contacts among its near particles, in their
+    /// (ascending) order: each particle closer than `reach` over it, or on
+    /// the other side than it started on.
+    fn pick(
+        &self,
+        t: usize,
+        tri: [u32; 3],
+        layers: &Layers,
+        spec: &ClothSpec,
+        reach: f32,
+        found: &mut Vec<SelfContact>,
+    ) {
+        let Layers {
+            now,
+            start,
+            inv_mass,
+        } = *layers;
+        let near = self.near.of(t);
+        if near.is_empty() {
+            return;
+        }
+        let corners = tri.map(|k| now[k as usize]);
+        let Some(t_now) = Triangle::new(corners) else {
+            return;
+        };
+        let (lo, hi) = bounds(corners, reach);
+        let rim = rim(tri, spec);
+        let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
+        let tangled = |k: u32| self.leaving && self.tangled.get(k as usize) == Some(&true);
+        if tri.into_iter().any(tangled) {
+            return;
+        }
+        let mut t_start = None;
+        for &p in near {
+            let x = now[p as usize];
+            if !(x.cmpge(lo).all() && x.cmple(hi).all())
+                || (driven && inv_mass[p as usize] == 0.0)
+                || tangled(p)
+            {
+                continue;
+            }
+            // Over the triangle, or near enough to come over it in the
+            // sweeps; a neighbour beside it (a coordinate near −1) is not.
+            let f_now = t_now.foot(x);
+            if !f_now.within(rim, CANDIDATE) {
+                continue;
+            }
+            let t_start =
+                t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
+            let Some(t_start) = t_start else {
+                break;
+            };
+            let side = if t_start.distance(start[p as usize]) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
+                found.push(SelfContact {
+                    particle: p,
+                    triangle: tri,
+                    side,
+                    rim,
+                });
+            }
+        }
     }
 
     /// Drops the contacts and the near pairs (the family was turned off).
