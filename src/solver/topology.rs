@@ -233,3 +233,46 @@ impl Topology {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether no two constraints of any colour share a particle.
+    fn colours_are_independent<T: Touches>(set: &Batched<T>, particles: usize) -> bool {
+        set.batches.iter().all(|range| {
+            let mut seen = vec![false; particles];
+            set.items[range.clone()]
+                .iter()
+                .flat_map(|c| c.particles())
+                .all(|i| !std::mem::replace(&mut seen[i as usize], true))
+        })
+    }
+
+    #[test]
+    fn grid_sets_are_complete_and_their_colours_independent() {
+        let sizes = [(1, 1), (2, 3), (3, 2), (5, 4), (7, 7), (24, 16), (64, 64)];
+        for (nx, ny) in sizes {
+            let spec = ClothSpec {
+                weft: nx,
+                warp: ny,
+                ..ClothSpec::default()
+            };
+            let t = Topology::grid(&spec);
+            let (nx, ny) = (nx as usize, ny as usize);
+            let n = nx * ny;
+            assert_eq!(t.structural.len(), (nx - 1) * ny + nx * (ny - 1));
+            assert_eq!(t.shear.len(), 2 * (nx - 1) * (ny - 1));
+            assert_eq!(
+                t.bend.len(),
+                nx.saturating_sub(2) * ny + nx * ny.saturating_sub(2)
+            );
+            for set in [&t.structural, &t.shear] {
+                assert!(colours_are_independent(set, n), "{nx} × {ny}");
+                assert_eq!(set.batches.last().map_or(0, |b| b.end), set.len());
+            }
+            assert!(colours_are_independent(&t.bend, n), "{nx} × {ny}");
+            assert!(t.structural.batches.len() <= 4 && t.bend.batches.len() <= 6);
+        }
+    }
+}

@@ -87,8 +87,14 @@ const INSIDE_RIM: f32 = 0.5;
 /// How much farther beyond a triangle's edges than [`INSIDE`] or
 /// [`INSIDE_RIM`] a particle may be, in barycentric terms, to be a contact
 /// of the substep: room to come over the triangle during the sweeps. A grid
-/// neighbour beside a triangle sits at about −1.
-const CANDIDATE: f32 = 0.25;
+/// neighbour beside a triangle sits at about −1. A twentieth of the
+/// triangle: a quarter made three times the contacts on a folded sheet
+/// (every particle near an edge took the triangles beyond it too, whose
+/// extended planes can put the particle on the wrong side), cost a third
+/// more of the step, and let `folding_sheet` at 32 × 32 and
+/// `furling_banner` at 48 × 36 cross where a twentieth does not
+/// (BENCHMARKS.md).
+const CANDIDATE: f32 = 0.05;
 
 /// Which edges of `tri` lie on the border of a `weft × warp` grid: bit `k`
 /// for the edge opposite corner `k`.
