@@ -119,16 +119,24 @@ impl<T: Touches + Copy> Batched<T> {
                 .filter(|&&c| c < 64)
                 .max()
                 .map_or(0, |c| c + 1);
-            for c in 0..colours {
-                let start = out.items.len();
-                out.items.extend(
-                    left.iter()
-                        .zip(&colour_of)
-                        .filter(|(_, k)| **k == c)
-                        .map(|(p, _)| *p),
-                );
-                out.batches.push(start..out.items.len());
+            // Counting sort by colour: where each colour's run starts, then
+            // each item into the next slot of its colour's run.
+            let mut next = vec![0usize; colours + 1];
+            for &c in colour_of.iter().filter(|&&c| c < 64) {
+                next[c + 1] += 1;
             }
+            for c in 0..colours {
+                next[c + 1] += next[c];
+            }
+            let base = out.items.len();
+            out.batches
+                .extend((0..colours).map(|c| base + next[c]..base + next[c + 1]));
+            let mut order = vec![0u32; next[colours]];
+            for (i, &c) in colour_of.iter().enumerate().filter(|(_, c)| **c < 64) {
+                order[next[c]] = i as u32;
+                next[c] += 1;
+            }
+            out.items.extend(order.iter().map(|&i| left[i as usize]));
             left = left
                 .into_iter()
                 .zip(colour_of)

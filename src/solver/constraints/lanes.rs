@@ -208,6 +208,22 @@ impl V3 {
         }
     }
 
+    /// `v` in every lane.
+    #[inline(always)]
+    pub(crate) fn splat(v: Vec3) -> Self {
+        Self {
+            x: F::splat(v.x),
+            y: F::splat(v.y),
+            z: F::splat(v.z),
+        }
+    }
+
+    /// `values[idx[k]]` in each lane `k`.
+    #[inline(always)]
+    pub(crate) fn gather(values: &[Vec3], idx: &[u32; LANES]) -> Self {
+        Self::from_lanes(each(|k| values[idx[k] as usize]))
+    }
+
     /// Lane `k`'s vector.
     #[inline(always)]
     pub(crate) fn lane(&self, k: usize) -> Vec3 {

@@ -214,6 +214,11 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 /// bit-identical for any number of threads. `project` is handed the share
 /// in chunks of up to [`LANES`] constraints with their multipliers, for the
 /// kernels that project a chunk side by side ([`lanes`]).
+///
+/// A run of small batches (a heap of contacts ends in dozens of colours of
+/// a few constraints each) is projected by thread 0 alone, batch after
+/// batch, with one barrier at its end: the same projections in the same
+/// order, without a barrier per batch that costs more than sharing saves.
 pub(crate) fn project_batches<T, M, R>(
     crew: &Crew,
     items: &[T],
@@ -227,31 +232,71 @@ pub(crate) fn project_batches<T, M, R>(
     R: Recorder,
 {
     assert_eq!(items.len(), mu.len());
-    for range in batches.iter().filter(|b| !b.is_empty()) {
-        let mine = crew.share(range.len());
-        let share = range.start + mine.start..range.start + mine.end;
-        // SAFETY: within `mu` (same length as `items`, checked); shares are
-        // disjoint, so these multipliers are this thread's until the barrier.
-        let mus = unsafe { mu.slice(share.clone()) };
-        let mut chunks = items[share].chunks_exact(LANES);
-        let mut mu_chunks = mus.chunks_exact_mut(LANES);
-        for (chunk, m) in (&mut chunks).zip(&mut mu_chunks) {
-            let (chunk, m) = (
-                chunk.try_into().expect("exact"),
-                m.try_into().expect("exact"),
-            );
-            project(chunk, m, LANES, rec);
-        }
-        // The tail, padded with copies of its first constraint, which the
-        // kernels compute but never write.
-        let (tail, mu_tail) = (chunks.remainder(), mu_chunks.into_remainder());
-        if let (Some(&first), Some(&first_mu)) = (tail.first(), mu_tail.first()) {
-            let chunk = lanes::each(|k| tail.get(k).copied().unwrap_or(first));
-            let mut m = lanes::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
-            project(&chunk, &mut m, tail.len(), rec);
-            mu_tail.copy_from_slice(&m[..tail.len()]);
+    let small = |b: &Range<usize>| b.len() < SOLO_BATCH;
+    let mut rest = batches;
+    while let Some(first) = rest.first() {
+        let run = if small(first) {
+            rest.iter().take_while(|b| small(b)).count()
+        } else {
+            1
+        };
+        let (now, later) = rest.split_at(run);
+        rest = later;
+        if run > 1 {
+            if crew.index() == 0 {
+                for b in now {
+                    project_range(items, mu, b.clone(), rec, &project);
+                }
+            }
+        } else {
+            let mine = crew.share(first.len());
+            let share = first.start + mine.start..first.start + mine.end;
+            project_range(items, mu, share, rec, &project);
         }
         crew.barrier();
+    }
+}
+
+/// Batches under this many constraints, one after another, are projected
+/// by one thread ([`project_batches`]).
+const SOLO_BATCH: usize = 256;
+
+/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
+#[inline(always)]
+fn project_range<T, M, R>(
+    items: &[T],
+    mu: &Shared<M>,
+    range: Range<usize>,
+    rec: &mut R,
+    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+) where
+    T: Copy,
+    M: Copy,
+    R: Recorder,
+{
+    if range.is_empty() {
+        return;
+    }
+    // SAFETY: within `mu` (same length as `items`, checked); shares are
+    // disjoint, so these multipliers are this thread's until the barrier.
+    let mus = unsafe { mu.slice(range.clone()) };
+    let mut chunks = items[range].chunks_exact(LANES);
+    let mut mu_chunks = mus.chunks_exact_mut(LANES);
+    for (chunk, m) in (&mut chunks).zip(&mut mu_chunks) {
+        let (chunk, m) = (
+            chunk.try_into().expect("exact"),
+            m.try_into().expect("exact"),
+        );
+        project(chunk, m, LANES, rec);
+    }
+    // The tail, padded with copies of its first constraint, which the
+    // kernels compute but never write.
+    let (tail, mu_tail) = (chunks.remainder(), mu_chunks.into_remainder());
+    if let (Some(&first), Some(&first_mu)) = (tail.first(), mu_tail.first()) {
+        let chunk = lanes::each(|k| tail.get(k).copied().unwrap_or(first));
+        let mut m = lanes::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
+        project(&chunk, &mut m, tail.len(), rec);
+        mu_tail.copy_from_slice(&m[..tail.len()]);
     }
 }
 

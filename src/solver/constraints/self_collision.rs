@@ -42,6 +42,7 @@
 
 use glam::Vec3;
 
+use super::lanes::{F, LANES, V3, each};
 use super::{Particles, Recorder, delta_mu, shift};
 use crate::solver::broad_phase::{NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
@@ -283,6 +284,76 @@ fn bounds(t: [Vec3; 3], margin: f32) -> (Vec3, Vec3) {
     )
 }
 
+/// The contact search's first test for one triangle, on [`LANES`]
+/// particles at a time: is the foot within the triangle grown by
+/// [`CANDIDATE`] (as [`Foot::within`])? Each barycentric coordinate is one
+/// dot product here, `β_b = (x − x_a) · ĝ_b` with `ĝ_b = (e₂ × n) / 2A`
+/// (and `ĝ_c = (n × e₁) / 2A`), which rounds differently from the foot's
+/// `((x − x_a) × e₂) · n / 2A`; so the bounds are loosened by [`ROUNDING`],
+/// every particle that passes alone passes here too, and the few more that
+/// pass here are then tested alone, exactly. The two roundings differ by a
+/// few `f32` ulps of `|x − x_a| / height`; for a particle in the box grown
+/// by the reach that stays below [`ROUNDING`] unless the triangle is a
+/// sliver (`(longest edge + 2 reach) / height` over [`SLIVER`]), which lets
+/// every particle through to the exact test.
+struct Candidates {
+    /// Every lane passes (a sliver).
+    all: bool,
+    corner: V3,
+    to_b: V3,
+    to_c: V3,
+    /// The lowest barycentric coordinate let through at each corner.
+    least: [F; 3],
+}
+
+/// Far more than the rounding of a barycentric coordinate near a triangle
+/// that is not a [`SLIVER`], far less than [`CANDIDATE`].
+const ROUNDING: f32 = 1e-3;
+
+/// The largest `(longest edge + 2 reach) / height` of a triangle whose
+/// particles are tested in lanes ([`Candidates`]).
+const SLIVER: f32 = 1e3;
+
+impl Candidates {
+    #[inline(always)]
+    fn new(t: &Triangle, rim: u8, reach: f32) -> Self {
+        let slack = |k: usize| {
+            if rim & (1 << k) != 0 {
+                INSIDE_RIM
+            } else {
+                INSIDE
+            }
+        };
+        let longest = (t.e1.length_squared())
+            .max(t.e2.length_squared())
+            .max((t.e2 - t.e1).length_squared())
+            .sqrt();
+        // height = 2A / longest edge.
+        let ratio = (longest + 2.0 * reach) * longest * t.inv_area2;
+        Self {
+            all: ratio.is_nan() || ratio > SLIVER,
+            corner: V3::splat(t.corner),
+            to_b: V3::splat(t.e2.cross(t.normal) * t.inv_area2),
+            to_c: V3::splat(t.normal.cross(t.e1) * t.inv_area2),
+            least: std::array::from_fn(|k| F::splat(-(slack(k) + CANDIDATE + ROUNDING))),
+        }
+    }
+
+    /// Bit `k` set where lane `k`'s point `x` passes.
+    #[inline(always)]
+    fn of(&self, x: V3) -> u32 {
+        if self.all {
+            return u32::MAX;
+        }
+        let v = x - self.corner;
+        let bb = v.dot(self.to_b);
+        let bc = v.dot(self.to_c);
+        let ba = F::ONE - bb - bc;
+        (ba.simd_ge(self.least[0]) & bb.simd_ge(self.least[1]) & bc.simd_ge(self.least[2]))
+            .to_bitmask()
+    }
+}
+
 /// The contacts of one substep, coloured, and the near pairs they were
 /// picked from.
 #[derive(Clone, Debug, Default)]
@@ -384,38 +455,47 @@ impl SelfContacts {
         if tri.into_iter().any(tangled) {
             return;
         }
+        let lanes = Candidates::new(&t_now, rim, reach);
         let mut t_start = None;
-        for &p in near {
-            let x = now[p as usize];
-            if !(x.cmpge(lo).all() && x.cmple(hi).all())
-                || (driven && inv_mass[p as usize] == 0.0)
-                || tangled(p)
-            {
-                continue;
-            }
-            // Over the triangle, or near enough to come over it in the
-            // sweeps; a neighbour beside it (a coordinate near −1) is not.
-            let f_now = t_now.foot(x);
-            if !f_now.within(rim, CANDIDATE) {
-                continue;
-            }
-            let t_start =
-                t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
-            let Some(t_start) = t_start else {
-                break;
-            };
-            let side = if t_start.distance(start[p as usize]) >= 0.0 {
-                1.0
-            } else {
-                -1.0
-            };
-            if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
-                found.push(SelfContact {
-                    particle: p,
-                    triangle: tri,
-                    side,
-                    rim,
-                });
+        for chunk in near.chunks(LANES) {
+            // A short chunk is padded with its first particle, whose lanes
+            // are then masked off.
+            let idx = each(|k| chunk.get(k).copied().unwrap_or(chunk[0]));
+            let mut hits = lanes.of(V3::gather(now, &idx)) & ((1 << chunk.len()) - 1);
+            while hits != 0 {
+                let p = idx[hits.trailing_zeros() as usize];
+                hits &= hits - 1;
+                let x = now[p as usize];
+                if !(x.cmpge(lo).all() && x.cmple(hi).all())
+                    || (driven && inv_mass[p as usize] == 0.0)
+                    || tangled(p)
+                {
+                    continue;
+                }
+                // Over the triangle, or near enough to come over it in the
+                // sweeps; a neighbour beside it (a coordinate near −1) is not.
+                let f_now = t_now.foot(x);
+                if !f_now.within(rim, CANDIDATE) {
+                    continue;
+                }
+                let t_start =
+                    t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
+                let Some(t_start) = t_start else {
+                    return;
+                };
+                let side = if t_start.distance(start[p as usize]) >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                };
+                if f_now.distance.abs() < reach || f_now.distance * side < 0.0 {
+                    found.push(SelfContact {
+                        particle: p,
+                        triangle: tri,
+                        side,
+                        rim,
+                    });
+                }
             }
         }
     }
@@ -768,5 +848,55 @@ impl TriangleCrossing {
                 crossing([p, o], tri);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn candidates_in_lanes_let_through_every_particle_the_exact_test_takes() {
+        let mut seed = 11u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1 << 24) as f32 * 2.0 - 1.0
+        };
+        let reach = 0.01;
+        let (mut taken, mut slivers) = (0, 0);
+        for round in 0..2000 {
+            // Cells of a 1 cm grid, far from the origin or not, bent, some
+            // squashed to slivers.
+            let origin =
+                Vec3::new(next(), next(), next()) * if round % 2 == 0 { 1.0 } else { 50.0 };
+            let squash = if round % 5 == 0 { 1e-4 } else { 1.0 };
+            let a = origin;
+            let b = origin + Vec3::new(0.01, 0.002 * next(), 0.004 * next());
+            let c = origin + Vec3::new(0.01 * next(), 0.01 * squash, 0.004 * next());
+            let Some(t) = Triangle::new([a, b, c]) else {
+                continue;
+            };
+            let rim = (round % 8) as u8;
+            let lanes = Candidates::new(&t, rim, reach);
+            slivers += usize::from(lanes.all);
+            let (lo, hi) = bounds([a, b, c], reach);
+            let points: [Vec3; LANES] = std::array::from_fn(|_| {
+                lo + (hi - lo) * (Vec3::new(next(), next(), next()) * 0.5 + 0.5)
+            });
+            let hits = lanes.of(V3::gather(&points, &each(|k| k as u32)));
+            for (k, &x) in points.iter().enumerate() {
+                if t.foot(x).within(rim, CANDIDATE) {
+                    taken += 1;
+                    assert!(
+                        hits & (1 << k) != 0,
+                        "round {round}: lane {k} dropped a candidate"
+                    );
+                }
+            }
+        }
+        assert!(
+            taken > 1000 && slivers > 0,
+            "{taken} candidates, {slivers} slivers"
+        );
     }
 }
