@@ -166,6 +166,19 @@ impl Triangle {
     }
 }
 
+/// The lowest barycentric coordinate at corner `k` of a foot within the
+/// triangle: below 0 by [`INSIDE`], or [`INSIDE_RIM`] if the edge opposite
+/// `k` is on the border (`rim`), and by `more`.
+#[inline(always)]
+fn least(rim: u8, k: usize, more: f32) -> f32 {
+    let slack = if rim & (1 << k) != 0 {
+        INSIDE_RIM
+    } else {
+        INSIDE
+    };
+    -(slack + more)
+}
+
 /// A point's foot on a triangle's plane.
 #[derive(Clone, Copy, Debug)]
 struct Foot {
@@ -190,14 +203,7 @@ impl Foot {
     /// by a hem, and every edge by `more`.
     #[inline(always)]
     fn within(&self, rim: u8, more: f32) -> bool {
-        (0..3).all(|k| {
-            let slack = if rim & (1 << k) != 0 {
-                INSIDE_RIM
-            } else {
-                INSIDE
-            };
-            self.bary[k] >= -(slack + more)
-        })
+        (0..3).all(|k| self.bary[k] >= least(rim, k, more))
     }
 
     /// Whether the foot is on the triangle, its border edges (`rim`) grown
@@ -317,17 +323,11 @@ const SLIVER: f32 = 1e3;
 impl Candidates {
     #[inline(always)]
     fn new(t: &Triangle, rim: u8, reach: f32) -> Self {
-        let slack = |k: usize| {
-            if rim & (1 << k) != 0 {
-                INSIDE_RIM
-            } else {
-                INSIDE
-            }
-        };
-        let longest = (t.e1.length_squared())
-            .max(t.e2.length_squared())
-            .max((t.e2 - t.e1).length_squared())
-            .sqrt();
+        let longest =
+            t.e1.length_squared()
+                .max(t.e2.length_squared())
+                .max((t.e2 - t.e1).length_squared())
+                .sqrt();
         // height = 2A / longest edge.
         let ratio = (longest + 2.0 * reach) * longest * t.inv_area2;
         Self {
@@ -335,7 +335,7 @@ impl Candidates {
             corner: V3::splat(t.corner),
             to_b: V3::splat(t.e2.cross(t.normal) * t.inv_area2),
             to_c: V3::splat(t.normal.cross(t.e1) * t.inv_area2),
-            least: std::array::from_fn(|k| F::splat(-(slack(k) + CANDIDATE + ROUNDING))),
+            least: std::array::from_fn(|k| F::splat(least(rim, k, CANDIDATE + ROUNDING))),
         }
     }
 
