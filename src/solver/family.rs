@@ -510,7 +510,7 @@ pub fn violation(
         Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
         Family::SelfCollision => {
             let mut depths = Vec::new();
-            self_collision::for_each_close(x, &topology.triangles, spec, |_, _, d| depths.push(d));
+            self_collision::for_each_close(x, topology, spec, |_, _, d| depths.push(d));
             Violation::of(depths.into_iter())
         }
     }
@@ -554,7 +554,7 @@ pub fn particle_violation(
             }
         }
         Family::SelfCollision => {
-            self_collision::for_each_close(x, &topology.triangles, spec, |p, tri, d| {
+            self_collision::for_each_close(x, topology, spec, |p, tri, d| {
                 for i in [p, tri[0], tri[1], tri[2]] {
                     put(i, d);
                 }

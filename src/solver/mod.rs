@@ -704,7 +704,7 @@ impl Solver {
                 start: &self.state.prev_position,
                 inv_mass: &self.inv_mass,
             },
-            &self.topology.triangles,
+            &self.topology,
             &self.spec,
             self.spec.thickness + SELF_CONTACT_SLACK * dx.min(dy),
             threads,

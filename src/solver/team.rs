@@ -100,6 +100,38 @@ pub(crate) fn run<T: Send>(threads: usize, work: impl Fn(&Crew) -> T + Sync) -> 
     .collect()
 }
 
+/// Runs `work` over `0..len` in blocks of `block` items on a crew of up
+/// to `threads` threads, and returns each block's result in block order.
+/// The blocks are handed out as threads come free (a share fixed in
+/// advance leaves one thread idle while the other finishes a busy part),
+/// and a block's result depends on its items alone, so what is returned
+/// does not depend on which thread took which block.
+pub(crate) fn run_blocks<T: Send>(
+    threads: usize,
+    len: usize,
+    block: usize,
+    work: impl Fn(Range<usize>) -> T + Sync,
+) -> Vec<T> {
+    let block = block.max(1);
+    let next = AtomicUsize::new(0);
+    let mut done: Vec<(usize, T)> = run(threads, |_| {
+        let mut done = Vec::new();
+        loop {
+            let b = next.fetch_add(1, Ordering::Relaxed);
+            let start = b.saturating_mul(block);
+            if start >= len {
+                return done;
+            }
+            done.push((b, work(start..len.min(start + block))));
+        }
+    })
+    .into_iter()
+    .flatten()
+    .collect();
+    done.sort_unstable_by_key(|&(b, _)| b);
+    done.into_iter().map(|(_, t)| t).collect()
+}
+
 /// How many threads a region may use where it is called from.
 pub(crate) fn available() -> usize {
     rayon::current_num_threads().min(pool().current_num_threads())
@@ -155,6 +187,16 @@ const SPINS: u32 = 4000;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn blocks_come_back_in_order_whatever_thread_took_them() {
+        for threads in [1, 2, 3] {
+            let blocks = run_blocks(threads, 103, 10, |r| r.collect::<Vec<_>>());
+            assert_eq!(blocks.len(), 11);
+            assert_eq!(blocks.concat(), (0..103).collect::<Vec<_>>());
+        }
+        assert!(run_blocks(2, 0, 10, |r| r.len()).is_empty());
+    }
 
     #[test]
     fn shares_cover_every_item_once_in_order() {

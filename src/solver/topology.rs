@@ -169,6 +169,22 @@ pub struct Topology {
     pub bend: TripleSet,
     /// Triangles of the cloth surface (two per cell), for meshes.
     pub triangles: Vec<[u32; 3]>,
+    /// Per triangle, which of its edges lie on the cloth's border ([`rim`]).
+    pub rims: Vec<u8>,
+}
+
+/// Which edges of `tri` lie on the border of a `weft × warp` grid: bit `k`
+/// for the edge opposite corner `k`.
+pub fn rim(tri: [u32; 3], spec: &ClothSpec) -> u8 {
+    let (w, h) = (spec.weft, spec.warp);
+    let on_border = |a: u32, b: u32| {
+        let (ai, aj, bi, bj) = (a % w, a / w, b % w, b / w);
+        (ai == bi && (ai == 0 || ai == w - 1)) || (aj == bj && (aj == 0 || aj == h - 1))
+    };
+    (0..3).fold(0, |m, k| {
+        let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+        m | (u8::from(on_border(a, b)) << k)
+    })
 }
 
 impl Topology {
@@ -237,6 +253,7 @@ impl Topology {
             structural: PairSet::coloured(structural, n),
             shear: PairSet::coloured(shear, n),
             bend: TripleSet::coloured(bend, n),
+            rims: triangles.iter().map(|&t| rim(t, spec)).collect(),
             triangles,
         }
     }

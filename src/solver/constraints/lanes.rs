@@ -252,6 +252,18 @@ impl V3 {
         }
     }
 
+    /// Set in the lanes whose point lies in the box `[lo, hi]`, bounds
+    /// included (as glam's `x.cmpge(lo).all() && x.cmple(hi).all()`).
+    #[inline(always)]
+    pub(crate) fn in_box(self, lo: Self, hi: Self) -> Mask {
+        self.x.simd_ge(lo.x)
+            & self.y.simd_ge(lo.y)
+            & self.z.simd_ge(lo.z)
+            & self.x.simd_le(hi.x)
+            & self.y.simd_le(hi.y)
+            & self.z.simd_le(hi.z)
+    }
+
     /// As glam's `Vec3::dot`.
     #[inline(always)]
     pub(crate) fn dot(self, o: Self) -> F {
