@@ -302,7 +302,7 @@ fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
         ),
         None => (
             solver.max_strain(),
-            Family::ALL.map(|fam| solver.violation(fam).max),
+            Family::ALL.map(|fam| solver.measured_violation(fam).max),
         ),
     };
     f.max_strain = f.max_strain.max(strain);

@@ -150,6 +150,39 @@ fn every_preset_records_and_reads_back() {
     }
 }
 
+/// The figures that verdicts are judged on are the same at every level of
+/// `weft record`: `off` measures the state itself, `summary` takes the
+/// solver's diagnostics. Both report self-collision as 0 while the family
+/// is off (even on a fold whose layers pass through each other), and alike
+/// while it is on.
+#[test]
+fn figures_do_not_depend_on_the_telemetry_level() {
+    let dir = tempfile::tempdir().unwrap();
+    for weight in ["0", "1"] {
+        let [off, summary] = ["off", "summary"].map(|level| {
+            let path = dir.path().join(format!("{weight}-{level}.json"));
+            let out = weft()
+                .args(["record", "folding_sheet", "--level", level, "--summary"])
+                .arg(&path)
+                .args(["--set", &format!("solver.weights.self={weight}")])
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(0), "{level}: {out:?}");
+            let json: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            json["figures"].clone()
+        });
+        for key in ["final_state", "max_strain", "max_violation"] {
+            assert_eq!(off[key], summary[key], "self = {weight}: {key}");
+        }
+        let self_collision = off["max_violation"]["self"].as_f64().unwrap();
+        match weight {
+            "0" => assert_eq!(self_collision, 0.0, "the family is off"),
+            _ => assert!(self_collision > 0.0, "the fold presses the layers"),
+        }
+    }
+}
+
 #[test]
 fn level_off_logs_no_frames_and_log_every_thins_them() {
     let dir = tempfile::tempdir().unwrap();

@@ -418,6 +418,16 @@ impl Solver {
         family::violation(family, &self.state, &self.topology, &self.spec)
     }
 
+    /// The violation a run's figures report for `family`: as
+    /// [`Solver::violation`], but self-collision's only while the family is
+    /// on (its measure is a contact search; off, it reports 0).
+    pub fn measured_violation(&self, family: Family) -> Violation {
+        if family == Family::SelfCollision && !self.self_collision_on() {
+            return Violation::default();
+        }
+        self.violation(family)
+    }
+
     /// Per particle, the largest violation of `family` among the
     /// constraints that involve it.
     pub fn particle_violation(&self, family: Family) -> Vec<f32> {
@@ -513,17 +523,11 @@ impl Solver {
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
+            let violations = Family::ALL.map(|f| self.measured_violation(f));
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.self_crossings = crossings;
-            for f in Family::ALL {
-                // Self-collision's measure needs a contact search: only
-                // while the family is on.
-                let on = f != Family::SelfCollision || crossings.is_some();
-                d.families[f].violation = if on {
-                    family::violation(f, &self.state, &self.topology, &self.spec)
-                } else {
-                    Violation::default()
-                };
+            for (f, v) in Family::ALL.into_iter().zip(violations) {
+                d.families[f].violation = v;
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
             d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);

@@ -398,9 +398,19 @@ pub(crate) fn atan(t: F) -> F {
     let t2 = t * t;
     let small =
         t * (F::ONE - t2 * (F::splat(1.0 / 3.0) - t2 * (F::splat(0.2) - t2 * F::splat(1.0 / 7.0))));
-    // Beyond 1, `π/2 − atan(1/a)`: one polynomial serves both ranges.
+    let is_small = a.simd_lt(0.05);
+    // A nearly flat cloth: every lane's angle is small (the common case).
+    if is_small.all() {
+        return small;
+    }
+    // Beyond 1, `π/2 − atan(1/a)`: one polynomial serves both ranges (the
+    // division only where a lane needs it).
     let steep = a.simd_gt(1.0);
-    let u = steep.select(F::ONE / a, a);
+    let u = if steep.any() {
+        steep.select(F::ONE / a, a)
+    } else {
+        a
+    };
     let z = u * u;
     let z2 = z * z;
     let c = ATAN_POLY.map(F::splat);
@@ -408,7 +418,7 @@ pub(crate) fn atan(t: F) -> F {
     let high = (c[4] + c[5] * z) + (c[6] + c[7] * z) * z2;
     let poly = u * (low + high * (z2 * z2));
     let wide = steep.select(F::FRAC_PI_2 - poly, poly).copysign(t);
-    a.simd_lt(0.05).select(small, wide)
+    is_small.select(small, wide)
 }
 
 /// [`atan2`](super::atan2) in every lane: in lanes for `x ≠ 0`, alone for
