@@ -1,6 +1,7 @@
 //! The simulation thread's state and loop: commands in, steps at real-time
 //! pace, status out.
 
+use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -29,6 +30,8 @@ pub(super) struct Worker {
     tee: Arc<Tee>,
     forward: Forward,
     inspect: Option<usize>,
+    /// The file the current run is recorded to, if any.
+    recording: Option<PathBuf>,
     status: Arc<Mutex<Status>>,
     playing: bool,
     speed: f32,
@@ -68,6 +71,7 @@ impl Worker {
             tee: opened.tee,
             forward,
             inspect: None,
+            recording: None,
             status,
             playing: false,
             speed: 1.0,
@@ -117,6 +121,7 @@ impl Worker {
         }
         self.finish();
         self.stop_recording();
+        self.publish();
     }
 
     fn handle(&mut self, c: Command) {
@@ -165,7 +170,7 @@ impl Worker {
                         let loaded = self.current_loaded();
                         self.loaded = loaded.clone();
                         if self.begin(Start::Fresh(Box::new(loaded)), Some(file)) {
-                            self.status.lock().expect("not poisoned").recording = Some(path);
+                            self.recording = Some(path);
                         }
                     }
                     Err(e) => {
@@ -313,7 +318,7 @@ impl Worker {
         if let Err(e) = self.tee.stop() {
             self.set_error(Some(e));
         }
-        self.status.lock().expect("not poisoned").recording = None;
+        self.recording = None;
     }
 
     fn step(&mut self) {
@@ -370,6 +375,7 @@ impl Worker {
         s.preset = Some(preset);
         s.run = self.info.clone();
         s.runs = self.runs.clone();
+        s.recording = self.recording.clone();
         progress.write(&mut s);
     }
 
