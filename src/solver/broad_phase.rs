@@ -37,12 +37,21 @@ use glam::{IVec3, Vec3};
 /// along (a flag on a car) keeps its pairs however fast it goes; a flap, a
 /// fold or a turn searches again.
 ///
-/// The pairs of each triangle are kept in ascending particle order, so
-/// what is built from them does not depend on when the last search was.
+/// **Groups.** Consecutive triangles come in groups of [`GROUP`] that share
+/// one list: the particles in the union of their grown boxes. A grid
+/// cloth lists a cell's two halves one after the other
+/// ([`Topology::grid`](super::topology::Topology::grid)), whose boxes are
+/// the cell's, so a group's list is each half's: one search and one
+/// gather of positions serve both. A list leaves out the corners that
+/// every triangle of its group shares (the cell's diagonal); a triangle's
+/// other corners may be in it, and its users skip them.
+///
+/// The particles of each group are kept in ascending order, so what is
+/// built from them does not depend on when the last search was.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct NearTriangles {
     hash: SpatialHash,
-    /// Triangle `t`'s particles are `particles[start[t]..start[t + 1]]`.
+    /// Group `g`'s particles are `particles[start[g]..start[g + 1]]`.
     start: Vec<u32>,
     particles: Vec<u32>,
     /// The positions the search was made at; empty: no search yet.
@@ -52,13 +61,25 @@ pub(crate) struct NearTriangles {
     searches: u64,
 }
 
+/// Triangles per group of [`NearTriangles`]: a grid cell's two halves.
+pub(crate) const GROUP: usize = 2;
+
+/// The groups of `triangles` triangles.
+pub(crate) fn groups(triangles: usize) -> usize {
+    triangles.div_ceil(GROUP)
+}
+
+/// The triangles of group `g`, among `triangles`.
+pub(crate) fn group(g: usize, triangles: usize) -> std::ops::Range<usize> {
+    g * GROUP..((g + 1) * GROUP).min(triangles)
+}
+
 impl NearTriangles {
     /// Makes sure the pairs hold for positions `x`: keeps them if the last
     /// search had the same `reach` and `skin` and the particles have since
     /// moved apart by less than the skin (see the type), else searches
     /// again. `spacing` is the mesh's longest rest edge along an axis (the
-    /// hash's cells are sized from it). A triangle's own corners are never
-    /// among its particles.
+    /// hash's cells are sized from it).
     pub(crate) fn update(
         &mut self,
         x: &[Vec3],
@@ -67,16 +88,24 @@ impl NearTriangles {
         spacing: f32,
         threads: usize,
     ) {
-        let same = self.reach_skin == (reach, skin) && self.start.len() == triangles.len() + 1;
+        let same =
+            self.reach_skin == (reach, skin) && self.start.len() == groups(triangles.len()) + 1;
         if same && self.holds(x) {
             return;
         }
         self.search(x, triangles, (reach, skin), spacing, threads);
     }
 
-    /// The particles near triangle `t`, in ascending order.
+    /// The particles near the triangles of group `g` ([`group`]), in
+    /// ascending order.
+    pub(crate) fn of_group(&self, g: usize) -> &[u32] {
+        &self.particles[self.start[g] as usize..self.start[g + 1] as usize]
+    }
+
+    /// The particles near triangle `t` (those of its group), in ascending
+    /// order.
     pub(crate) fn of(&self, t: usize) -> &[u32] {
-        &self.particles[self.start[t] as usize..self.start[t + 1] as usize]
+        self.of_group(t / GROUP)
     }
 
     /// How many searches have been made (the rest of the updates reused one).
@@ -120,19 +149,23 @@ impl NearTriangles {
         // Cells a triangle's box (a cell's diagonal, grown) fits in two of
         // along each axis.
         self.hash.build(x, spacing + 2.0 * (reach + skin));
-        // Each thread searches its share of the triangles; the shares,
-        // joined in order, are what one thread would find alone.
+        // Each thread searches its share of the groups; the shares, joined
+        // in order, are what one thread would find alone.
         let hash = &self.hash;
         let shares = team::run(threads, |crew| {
             let (mut particles, mut ends) = (Vec::new(), Vec::new());
-            for tri in &triangles[crew.share(triangles.len())] {
-                let corners = tri.map(|k| x[k as usize]);
-                let lo = corners[0].min(corners[1]).min(corners[2]) - grow;
-                let hi = corners[0].max(corners[1]).max(corners[2]) + grow;
+            for g in crew.share(groups(triangles.len())) {
+                let tris = &triangles[group(g, triangles.len())];
+                let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+                for c in tris.iter().flatten().map(|&k| x[k as usize]) {
+                    (lo, hi) = (lo.min(c), hi.max(c));
+                }
+                let (lo, hi) = (lo - grow, hi + grow);
+                let shared = |p: u32| tris.iter().all(|t| t.contains(&p));
                 let from = particles.len();
                 hash.query(lo, hi, |p| {
                     let xp = x[p as usize];
-                    if xp.cmpge(lo).all() && xp.cmple(hi).all() && !tri.contains(&p) {
+                    if xp.cmpge(lo).all() && xp.cmple(hi).all() && !shared(p) {
                         particles.push(p);
                     }
                 });
@@ -341,6 +374,9 @@ mod tests {
                 for p in in_box(&x, t, reach) {
                     assert!(kept.contains(&p), "triangle {k} lost particle {p}");
                 }
+                // A cell's diagonal is in neither half's list.
+                let group = &tris[group(k / GROUP, tris.len())];
+                assert!(kept.iter().all(|p| !group.iter().all(|t| t.contains(p))));
             }
         }
     }

@@ -28,6 +28,7 @@ use glam::{Quat, Vec3};
 use wide::f32x8;
 
 use super::{ATAN_POLY, Particles, Recorder, shift, turn};
+use crate::solver::cloth::FOURTH_ORDER;
 use crate::solver::forced_rotation::ForcedRotation;
 
 /// Constraints projected side by side.
@@ -375,13 +376,29 @@ impl Q4 {
 
 /// [`turn_by`](crate::solver::cloth::turn_by) by its half-angle series, in
 /// every lane; the mask says which lanes are within the series' range (the
-/// others need the scalar turn).
+/// others need the scalar turn). The fourth-order terms only where they
+/// count ([`FOURTH_ORDER`]): elsewhere `θ⁴` would be subnormal for the tiny
+/// turns of a resting cloth.
 #[inline(always)]
 fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
     let t2 = r.length_squared();
-    let t4 = t2 * t2;
-    let c = (F::ONE - t2 * F::splat(1.0 / 8.0)) + t4 * F::splat(1.0 / 384.0);
-    let s = (F::splat(0.5) - t2 * F::splat(1.0 / 48.0)) + t4 * F::splat(1.0 / 3840.0);
+    let (c, s) = (
+        F::ONE - t2 * F::splat(1.0 / 8.0),
+        F::splat(0.5) - t2 * F::splat(1.0 / 48.0),
+    );
+    let fourth = t2.simd_ge(FOURTH_ORDER);
+    let (c, s) = if fourth.none() {
+        (c, s)
+    } else {
+        // At least FOURTH_ORDER² in every lane, so never subnormal; the
+        // lanes below keep the second-order values.
+        let t2 = t2.max(F::splat(FOURTH_ORDER));
+        let t4 = t2 * t2;
+        (
+            fourth.select(c + t4 * F::splat(1.0 / 384.0), c),
+            fourth.select(s + t4 * F::splat(1.0 / 3840.0), s),
+        )
+    };
     let d = Q4 {
         x: r.x * s,
         y: r.y * s,

@@ -44,7 +44,7 @@ use glam::Vec3;
 
 use super::lanes::{F, LANES, V3, each};
 use super::{Particles, Recorder, delta_mu, shift};
-use crate::solver::broad_phase::{NearTriangles, SpatialHash};
+use crate::solver::broad_phase::{self, NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
 use crate::solver::team;
 use crate::solver::topology::{Batched, Topology, Touches};
@@ -335,6 +335,113 @@ impl Candidates {
     }
 }
 
+/// Up to [`LANES`] particles and their positions, in lanes.
+struct Gathered {
+    idx: [u32; LANES],
+    x: V3,
+    /// Bit `k` set if lane `k` holds a particle.
+    live: u32,
+}
+
+impl Gathered {
+    /// The particles `chunk` (at most [`LANES`]) at positions `x`. A short
+    /// chunk is padded with its first particle, whose lanes are then masked
+    /// off.
+    #[inline]
+    fn of(chunk: &[u32], x: &[Vec3]) -> Self {
+        let idx = each(|k| chunk.get(k).copied().unwrap_or(chunk[0]));
+        Self {
+            idx,
+            x: V3::gather(x, &idx),
+            live: (1 << chunk.len()) - 1,
+        }
+    }
+}
+
+/// One triangle's contact search within a substep: its [`Candidates`]
+/// test, and the triangle now and at the substep's start, made once a
+/// particle passes.
+struct Picker {
+    tri: [u32; 3],
+    rim: u8,
+    lanes: Candidates,
+    /// Every corner driven: a driven particle is no contact of it.
+    driven: bool,
+    now: Option<Option<Triangle>>,
+    start: Option<Option<Triangle>>,
+}
+
+impl Picker {
+    /// The search for triangle `tri` (border edges `rim`); `None` if it is
+    /// degenerate.
+    #[inline]
+    fn new(tri: [u32; 3], rim: u8, layers: &Layers, reach: f32) -> Option<Self> {
+        let corners = tri.map(|k| layers.now[k as usize]);
+        Some(Self {
+            tri,
+            rim,
+            lanes: Candidates::new(corners, rim, reach)?,
+            driven: tri.iter().all(|&k| layers.inv_mass[k as usize] == 0.0),
+            now: None,
+            start: None,
+        })
+    }
+
+    /// Appends the contacts among the lanes `hits` of particles `idx` that
+    /// passed [`Candidates`]: not a corner, not a driven particle of a
+    /// driven triangle, not tangled, and closer than `reach` to the plane or
+    /// on the other side than it started on. `false` if the triangle turned
+    /// out degenerate (now or at the substep's start): no more contacts.
+    #[inline]
+    fn take(
+        &mut self,
+        mut hits: u32,
+        idx: &[u32; LANES],
+        layers: &Layers,
+        reach: f32,
+        tangled: &impl Fn(u32) -> bool,
+        found: &mut Vec<SelfContact>,
+    ) -> bool {
+        let Layers {
+            now,
+            start,
+            inv_mass,
+        } = *layers;
+        let tri = self.tri;
+        while hits != 0 {
+            let p = idx[hits.trailing_zeros() as usize];
+            hits &= hits - 1;
+            if tri.contains(&p) || (self.driven && inv_mass[p as usize] == 0.0) || tangled(p) {
+                continue;
+            }
+            let t_now = self
+                .now
+                .get_or_insert_with(|| Triangle::new(tri.map(|k| now[k as usize])));
+            let t_start = self
+                .start
+                .get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
+            let (Some(t_now), Some(t_start)) = (t_now, t_start) else {
+                return false;
+            };
+            let side = if t_start.distance(start[p as usize]) >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let distance = t_now.distance(now[p as usize]);
+            if distance.abs() < reach || distance * side < 0.0 {
+                found.push(SelfContact {
+                    particle: p,
+                    triangle: tri,
+                    side,
+                    rim: self.rim,
+                });
+            }
+        }
+        true
+    }
+}
+
 /// The contacts of one substep, coloured, and the near pairs they were
 /// picked from.
 #[derive(Clone, Debug, Default)]
@@ -362,9 +469,9 @@ pub(crate) struct Layers<'a> {
     pub inv_mass: &'a [f32],
 }
 
-/// Triangles a thread checks for contacts at a time: a few dozen
+/// Triangle groups a thread checks for contacts at a time: a few dozen
 /// microseconds' work.
-const PICK_BLOCK: usize = 64;
+const PICK_BLOCK: usize = 32;
 
 /// The near pairs' skin, in rest spacings: how far the particles may move
 /// (beyond their common motion) between two searches, twice over. Larger
@@ -395,13 +502,14 @@ impl SelfContacts {
             dx.max(dy),
             threads,
         );
-        // The threads check blocks of triangles; the blocks' finds, joined
-        // in order, are what one thread would find alone.
+        // The threads check blocks of triangle groups; the blocks' finds,
+        // joined in order, are what one thread would find alone.
         let this = &*self;
-        let blocks = team::run_blocks(threads, triangles.len(), PICK_BLOCK, |range| {
-            let mut found = Vec::new();
-            for t in range {
-                this.pick(t, triangles[t], mesh.rims[t], layers, reach, &mut found);
+        let groups = broad_phase::groups(triangles.len());
+        let blocks = team::run_blocks(threads, groups, PICK_BLOCK, |range| {
+            let (mut found, mut gathered) = (Vec::new(), Vec::new());
+            for g in range {
+                this.pick(g, mesh, layers, reach, &mut found, &mut gathered);
             }
             found
         });
@@ -409,72 +517,48 @@ impl SelfContacts {
         self.set = Batched::coloured(found, now.len());
     }
 
-    /// Appends triangle `t`'s contacts among its near particles, in their
-    /// (ascending) order: each particle inside the triangle's box grown by
-    /// `reach`, with its foot over the triangle (or near enough to come over
-    /// it in the sweeps: [`Candidates`]), and closer than `reach` to its
-    /// plane or on the other side than it started on. A grid neighbour
-    /// beside the triangle (a coordinate near −1) is not.
+    /// Appends the contacts of the triangles of group `g`
+    /// ([`NearTriangles`]) among the group's near particles, triangle by
+    /// triangle, each in the particles' (ascending) order: each particle
+    /// inside the triangle's box grown by `reach`, with its foot over the
+    /// triangle (or near enough to come over it in the sweeps:
+    /// [`Candidates`]), and closer than `reach` to its plane or on the other
+    /// side than it started on. A grid neighbour beside the triangle (a
+    /// coordinate near −1) is not. The group's particles are gathered into
+    /// lanes once (`gathered`, scratch space) for all its triangles.
     fn pick(
         &self,
-        t: usize,
-        tri: [u32; 3],
-        rim: u8,
+        g: usize,
+        mesh: &Topology,
         layers: &Layers,
         reach: f32,
         found: &mut Vec<SelfContact>,
+        gathered: &mut Vec<Gathered>,
     ) {
-        let Layers {
-            now,
-            start,
-            inv_mass,
-        } = *layers;
-        let near = self.near.of(t);
+        let near = self.near.of_group(g);
         if near.is_empty() {
             return;
         }
         let tangled = |k: u32| self.leaving && self.tangled.get(k as usize) == Some(&true);
-        if tri.into_iter().any(tangled) {
-            return;
-        }
-        let corners = tri.map(|k| now[k as usize]);
-        let Some(lanes) = Candidates::new(corners, rim, reach) else {
-            return;
-        };
-        let driven = tri.iter().all(|&k| inv_mass[k as usize] == 0.0);
-        // The triangle now and at the substep's start, once a particle
-        // passes.
-        let (mut t_now, mut t_start) = (None, None);
-        for chunk in near.chunks(LANES) {
-            // A short chunk is padded with its first particle, whose lanes
-            // are then masked off.
-            let idx = each(|k| chunk.get(k).copied().unwrap_or(chunk[0]));
-            let mut hits = lanes.of(V3::gather(now, &idx)) & ((1 << chunk.len()) - 1);
-            while hits != 0 {
-                let p = idx[hits.trailing_zeros() as usize];
-                hits &= hits - 1;
-                if (driven && inv_mass[p as usize] == 0.0) || tangled(p) {
-                    continue;
-                }
-                let t_now = t_now.get_or_insert_with(|| Triangle::new(corners));
-                let t_start =
-                    t_start.get_or_insert_with(|| Triangle::new(tri.map(|k| start[k as usize])));
-                let (Some(t_now), Some(t_start)) = (t_now, t_start) else {
-                    return;
-                };
-                let side = if t_start.distance(start[p as usize]) >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                let distance = t_now.distance(now[p as usize]);
-                if distance.abs() < reach || distance * side < 0.0 {
-                    found.push(SelfContact {
-                        particle: p,
-                        triangle: tri,
-                        side,
-                        rim,
-                    });
+        gathered.clear();
+        for t in broad_phase::group(g, mesh.triangles.len()) {
+            let tri = mesh.triangles[t];
+            if tri.into_iter().any(tangled) {
+                continue;
+            }
+            let Some(mut picker) = Picker::new(tri, mesh.rims[t], layers, reach) else {
+                continue;
+            };
+            if gathered.is_empty() {
+                gathered.extend(
+                    near.chunks(LANES)
+                        .map(|chunk| Gathered::of(chunk, layers.now)),
+                );
+            }
+            for chunk in gathered.iter() {
+                let hits = picker.lanes.of(chunk.x) & chunk.live;
+                if hits != 0 && !picker.take(hits, &chunk.idx, layers, reach, &tangled, found) {
+                    break;
                 }
             }
         }
