@@ -3,8 +3,8 @@
 //! colliders, all in one parallel region ([`team`](super::team)).
 //!
 //! Every thread of the crew walks the same sequence: for each family, each
-//! of its constraint sets, each colour batch, it projects its share of the
-//! batch and waits at a barrier; then it pushes its share of the particles
+//! of its constraint sets, each colour batch, it projects the blocks of the
+//! batch it claims as it comes free and waits at a barrier; then it pushes its share of the particles
 //! out of the colliders (each particle on its own, colliders in index
 //! order) and waits again. Because no two constraints of a colour share a
 //! free particle, and a particle's collider pass reads only that particle,

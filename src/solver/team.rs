@@ -5,10 +5,12 @@
 //! sheet projects about 40 batches of a few thousand constraints per sweep.
 //! Handing each batch to a thread pool costs about as much as the batch
 //! itself, so instead every thread of a [`Crew`] walks the whole chain at
-//! once, takes its own slice of each batch ([`Crew::share`]) and waits at a
-//! [`Crew::barrier`] before the next. A slice is fixed by the batch's length
-//! and the crew's size only, and the constraints of a colour share no free
-//! particle, so the result does not depend on the number of threads.
+//! once, claims blocks of each batch as it comes free ([`Crew::claim`]; a
+//! fixed slice, [`Crew::share`], left one thread waiting for the other
+//! where the cloth's far part turns more) and waits at a [`Crew::barrier`]
+//! before the next. The constraints of a colour share no free particle and
+//! each one's result does not depend on the thread that projects it, so the
+//! result does not depend on the number of threads or the split.
 //!
 //! The threads come from one private pool, created on first use, with a
 //! thread per core. Only one region runs on it at a time (two regions
@@ -21,7 +23,9 @@
 //! ```ignore
 //! team::run(2, |crew| {
 //!     for batch in &batches {
-//!         for k in crew.share(batch.len()) { /* project batch[k] */ }
+//!         while let Some(block) = crew.claim(batch.len(), 64) {
+//!             for k in block { /* project batch[k] */ }
+//!         }
 //!         crew.barrier();
 //!     }
 //! });
@@ -49,6 +53,39 @@ impl Crew<'_> {
     #[inline]
     pub(crate) fn share(&self, len: usize) -> Range<usize> {
         share(len, self.index, self.size)
+    }
+
+    /// How many threads the crew has.
+    pub(crate) fn size(&self) -> usize {
+        self.size
+    }
+
+    /// The next block of up to `block` items of a batch of `len` items that
+    /// no thread of the crew has taken yet, or `None` when all are taken.
+    /// Threads take blocks as they come free, so one that meets cheap items
+    /// does not wait at the next barrier for one that meets dear ones. Which
+    /// thread handles an item must not change its result (true of a colour
+    /// batch); every thread of the crew calls this until `None`, for one
+    /// batch between two barriers.
+    #[inline]
+    pub(crate) fn claim(&self, len: usize, block: usize) -> Option<Range<usize>> {
+        let block = block.max(1);
+        let cursor = self.barrier.cursor();
+        let start = if self.size == 1 {
+            let start = cursor.load(Ordering::Relaxed);
+            cursor.store(start + block, Ordering::Relaxed);
+            start
+        } else {
+            cursor.fetch_add(block, Ordering::Relaxed)
+        };
+        if start < len {
+            return Some(start..len.min(start + block));
+        }
+        if self.size == 1 {
+            // No barrier follows to reset it.
+            cursor.store(0, Ordering::Relaxed);
+        }
+        None
     }
 
     /// Waits until every thread of the crew has arrived. Everything written
@@ -155,17 +192,31 @@ fn pool() -> &'static rayon::ThreadPool {
 /// A reusable barrier: spins briefly (a batch takes microseconds), then
 /// yields the core, so a crew sharing the machine with other work does not
 /// burn it waiting for a thread that is not running.
+///
+/// It also keeps the cursors of [`Crew::claim`], one for the phases between
+/// barriers of even generation and one for odd: the thread that completes a
+/// barrier zeroes the cursor of the phase it opens, last used two phases
+/// ago by threads that have all arrived since.
 #[derive(Default)]
 struct Barrier {
     arrived: AtomicUsize,
     generation: AtomicUsize,
+    cursors: [AtomicUsize; 2],
 }
 
 impl Barrier {
+    /// The claim cursor of the current phase (the generation cannot change
+    /// while a thread of the crew is between two barriers).
+    #[inline]
+    fn cursor(&self) -> &AtomicUsize {
+        &self.cursors[self.generation.load(Ordering::Acquire) % 2]
+    }
+
     fn wait(&self, size: usize) {
         let generation = self.generation.load(Ordering::Acquire);
         if self.arrived.fetch_add(1, Ordering::AcqRel) + 1 == size {
             self.arrived.store(0, Ordering::Relaxed);
+            self.cursors[(generation + 1) % 2].store(0, Ordering::Relaxed);
             self.generation.fetch_add(1, Ordering::Release);
             return;
         }
@@ -209,6 +260,31 @@ mod tests {
                     assert_eq!(w[0].end, w[1].start);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn claims_hand_out_each_item_of_each_batch_once() {
+        let lens = [37usize, 0, 8, 100, 3];
+        for threads in [1, 2] {
+            let taken = run(threads, |crew| {
+                let mut taken = Vec::new();
+                for (batch, &len) in lens.iter().enumerate() {
+                    while let Some(r) = crew.claim(len, 8) {
+                        taken.extend(r.map(|k| (batch, k)));
+                    }
+                    crew.barrier();
+                }
+                taken
+            });
+            let mut all = taken.concat();
+            all.sort_unstable();
+            let expected: Vec<_> = lens
+                .iter()
+                .enumerate()
+                .flat_map(|(b, &len)| (0..len).map(move |k| (b, k)))
+                .collect();
+            assert_eq!(all, expected, "{threads} threads");
         }
     }
 

@@ -208,10 +208,12 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 }
 
 /// Projects `items` colour batch by colour batch with `project`, each with
-/// its own multiplier in `mu` (same index). Every thread of `crew` takes its
-/// share of each batch and waits for the others before the next: within a
-/// batch the order does not matter (no shared particles), so the result is
-/// bit-identical for any number of threads. `project` is handed the share
+/// its own multiplier in `mu` (same index). The threads of `crew` take
+/// blocks of each batch as they come free ([`Crew::claim`]) and wait for
+/// each other before the next: within a batch the order does not matter (no
+/// shared particles), and a constraint's projection does not depend on the
+/// thread or the lane it runs in, so the result is bit-identical for any
+/// number of threads and any split. `project` is handed the share
 /// in chunks of up to [`LANES`] constraints with their multipliers, for the
 /// kernels that project a chunk side by side ([`lanes`]).
 ///
@@ -249,9 +251,11 @@ pub(crate) fn project_batches<T, M, R>(
                 }
             }
         } else {
-            let mine = crew.share(first.len());
-            let share = first.start + mine.start..first.start + mine.end;
-            project_range(items, mu, share, rec, &project);
+            let block = claim_block(first.len(), crew.size());
+            while let Some(mine) = crew.claim(first.len(), block) {
+                let share = first.start + mine.start..first.start + mine.end;
+                project_range(items, mu, share, rec, &project);
+            }
         }
         crew.barrier();
     }
@@ -260,6 +264,14 @@ pub(crate) fn project_batches<T, M, R>(
 /// Batches under this many constraints, one after another, are projected
 /// by one thread ([`project_batches`]).
 const SOLO_BATCH: usize = 256;
+
+/// The blocks a crew of `size` claims a batch of `len` constraints in
+/// ([`Crew::claim`]): about four a thread, so that a thread that meets cheap
+/// constraints (small angles: no steep arctangent, no cut by Eq. 3) takes
+/// more of them, in whole chunks of [`LANES`].
+fn claim_block(len: usize, size: usize) -> usize {
+    len.div_ceil(4 * size).next_multiple_of(LANES)
+}
 
 /// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
 #[inline(always)]
