@@ -70,31 +70,16 @@ impl Crew<'_> {
     #[inline]
     pub(crate) fn claim(&self, len: usize, block: usize) -> Option<Range<usize>> {
         let block = block.max(1);
-        let cursor = self.barrier.cursor();
-        let start = if self.size == 1 {
-            let start = cursor.load(Ordering::Relaxed);
-            cursor.store(start + block, Ordering::Relaxed);
-            start
-        } else {
-            cursor.fetch_add(block, Ordering::Relaxed)
-        };
-        if start < len {
-            return Some(start..len.min(start + block));
-        }
-        if self.size == 1 {
-            // No barrier follows to reset it.
-            cursor.store(0, Ordering::Relaxed);
-        }
-        None
+        let start = self.barrier.cursor().fetch_add(block, Ordering::Relaxed);
+        (start < len).then(|| start..len.min(start + block))
     }
 
     /// Waits until every thread of the crew has arrived. Everything written
-    /// before it is visible to every thread after it.
+    /// before it is visible to every thread after it. (A crew of one passes
+    /// at once, but still opens the next phase for [`Crew::claim`].)
     #[inline]
     pub(crate) fn barrier(&self) {
-        if self.size > 1 {
-            self.barrier.wait(self.size);
-        }
+        self.barrier.wait(self.size);
     }
 }
 
