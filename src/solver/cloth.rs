@@ -267,7 +267,7 @@ pub fn rotate(q: Quat, r: Vec3) -> Quat {
 /// θ < 0.05), avoiding the trigonometric calls.
 #[inline]
 pub fn turn_by(q: Quat, r: Vec3) -> Quat {
-    let t2 = r.length_squared();
+    let t2 = angle_squared(r);
     let d = if t2 < 0.0025 {
         // cos(θ/2) ≈ 1 − θ²/8 + θ⁴/384,  sin(θ/2)/θ ≈ ½ − θ²/48 + θ⁴/3840
         // (Multiplied by the reciprocals: a division by a constant that is
@@ -288,6 +288,22 @@ pub fn turn_by(q: Quat, r: Vec3) -> Quat {
     };
     d * q
 }
+
+/// `θ² = |r|²` for [`turn_by`], leaving out the components under
+/// [`NEGLIGIBLE_TURN`]: their squares (under `10⁻³⁰`) would be subnormal for
+/// the tiny turns of a cloth at rest, and leaving them out changes no
+/// result. Where `θ²` is under `10⁻⁸` the series' factors round to exactly 1
+/// and ½ whatever its value; above, the left-out squares are far under
+/// half a unit in its last place and the sum rounds the same.
+#[inline(always)]
+pub(crate) fn angle_squared(r: Vec3) -> f32 {
+    let kept = |v: f32| if v.abs() < NEGLIGIBLE_TURN { 0.0 } else { v };
+    Vec3::new(kept(r.x), kept(r.y), kept(r.z)).length_squared()
+}
+
+/// A component of a turn's rotation vector under this is left out of `θ²`
+/// ([`angle_squared`]).
+pub(crate) const NEGLIGIBLE_TURN: f32 = 1e-15;
 
 /// The smallest `θ²` whose fourth-order terms in [`turn_by`]'s series
 /// change a result: below it `θ⁴/384 < 3·10⁻¹¹`, far under half a unit in

@@ -68,8 +68,12 @@ impl ForcedRotation {
         // exp(−r) ≥ 1 − r with r = h / violation: when even that lower bound
         // of the envelope is above the full correction, the min is the full
         // correction (exact, and by far the common case; multiplied through
-        // by the violation, so without a division).
-        if full * violation <= self.phi * (violation - self.h) {
+        // by the violation, so without a division). Under `h` the right
+        // side is negative (for Φ > 0) and the test fails without the
+        // product, which for the tiny violations of a cloth at rest would be
+        // subnormal (see `cloth::FOURTH_ORDER`).
+        let below = violation < self.h && self.phi > 0.0;
+        if !below && full * violation <= self.phi * (violation - self.h) {
             return full;
         }
         let ratio = self.h / violation;

@@ -98,8 +98,8 @@ pub(crate) fn project<R: Recorder>(
     if on.any() {
         let e: V3 = e * (F::ONE / e_len);
         let bend = lanes::atan2(na.cross(nb).dot(e), na.dot(nb));
-        let mut d = lanes::delta_mu(bend, ba + bb, F::splat(4.0) * alpha_t, mus[1]);
-        d *= lanes::scale(rot, bend.abs(), on.select(ba.max(bb) * d.abs(), F::ZERO));
+        let d = lanes::delta_mu(bend, ba + bb, F::splat(4.0) * alpha_t, mus[1]);
+        let d = lanes::forced(rot, bend.abs(), d, ba.max(bb), on);
         mus[1] = on.select(mus[1] + d, mus[1]);
         a.turn(p, qa, e * (-ba * d), on & ba.simd_gt(0.0), rec);
         b.turn(p, qb, e * (bb * d), on & bb.simd_gt(0.0), rec);

@@ -27,8 +27,8 @@
 use glam::{Quat, Vec3};
 use wide::f32x8;
 
-use super::{ATAN_POLY, Particles, Recorder, shift, turn};
-use crate::solver::cloth::FOURTH_ORDER;
+use super::{ATAN_POLY, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, turn};
+use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
 use crate::solver::forced_rotation::ForcedRotation;
 
 /// Constraints projected side by side.
@@ -59,8 +59,8 @@ pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
 /// The mask of the first `live` lanes.
 #[inline(always)]
 pub(crate) fn live(live: usize) -> Mask {
-    const ON: f32 = f32::from_bits(u32::MAX);
-    F::new(each(|k| if k < live { ON } else { 0.0 }))
+    let lane = F::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    lane.simd_lt(F::splat(live as f32))
 }
 
 impl Chunk {
@@ -381,7 +381,14 @@ impl Q4 {
 /// turns of a resting cloth.
 #[inline(always)]
 fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
-    let t2 = r.length_squared();
+    // As the scalar `angle_squared`: components under NEGLIGIBLE_TURN left out.
+    let kept = |v: F| v.abs().simd_lt(NEGLIGIBLE_TURN).select(F::ZERO, v);
+    let t2 = V3 {
+        x: kept(r.x),
+        y: kept(r.y),
+        z: kept(r.z),
+    }
+    .length_squared();
     let (c, s) = (
         F::ONE - t2 * F::splat(1.0 / 8.0),
         F::splat(0.5) - t2 * F::splat(1.0 / 48.0),
@@ -412,7 +419,9 @@ fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
 #[inline(always)]
 pub(crate) fn atan(t: F) -> F {
     let a = t.abs();
-    let t2 = t * t;
+    // As the scalar `square_above_subnormal`.
+    let floor = a.max(F::splat(SMALL_ANGLE_FLOOR));
+    let t2 = floor * floor;
     let small =
         t * (F::ONE - t2 * (F::splat(1.0 / 3.0) - t2 * (F::splat(0.2) - t2 * F::splat(1.0 / 7.0))));
     let is_small = a.simd_lt(0.05);
@@ -470,15 +479,27 @@ pub(crate) fn delta_mu(c: F, w: F, alpha_t: F, mu: F) -> F {
 #[inline(always)]
 pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
     let (phi, h) = (F::splat(rot.phi), F::splat(rot.h));
+    // As the scalar test, the product left out under `h` (a zero factor,
+    // so that it is never subnormal).
+    let below = if rot.phi > 0.0 {
+        violation.simd_lt(h)
+    } else {
+        F::ZERO
+    };
+    let product = full * below.select(F::ZERO, violation);
     // Nothing asked (or NaN), or the envelope's lower bound lets it all
     // through: the common case.
     let whole = !full.simd_gt(0.0)
-        | (violation.simd_gt(0.0) & (full * violation).simd_le(phi * (violation - h)));
+        | (violation.simd_gt(0.0) & !below & product.simd_le(phi * (violation - h)));
     if whole.all() {
         return F::ONE;
     }
     let ratio = h / violation;
-    let envelope = ratio.simd_le(0.0).select(phi, phi * exp_neg(ratio));
+    // Lanes past 80 take 0 below; capping their ratio keeps exp_neg from
+    // making subnormals that are thrown away.
+    let envelope = ratio
+        .simd_le(0.0)
+        .select(phi, phi * exp_neg(ratio.min(F::splat(80.0))));
     let mut angle = ratio.simd_ge(80.0).select(F::ZERO, full.min(envelope));
     // No violation (or NaN): the envelope is closed (h > 0) or Φ (h = 0).
     let closed = if rot.h > 0.0 { F::ZERO } else { full.min(phi) };
@@ -486,6 +507,30 @@ pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
     let fraction = angle.simd_ge(full).select(F::ONE, angle / full);
     whole.select(F::ONE, fraction)
 }
+
+/// A chunk's multiplier changes `d` shaped by Eq. 3 ([`scale`]) for
+/// constraints violated by `violation` whose largest turn is `beta · |d|`,
+/// in the lanes of `on`; a change under [`NEGLIGIBLE_CHANGE`] (or a cut to
+/// under `NEGLIGIBLE_CHANGE` of the change asked) is dropped.
+///
+/// Eq. 3 lets through only `exp(−h / violation)` of the turn asked for a
+/// violation far under `h`: for the tiny violations of a cloth at rest that
+/// is `10⁻³⁰` of it and less, so the change, the multiplier, the moves and
+/// the turns that follow would all be subnormal numbers (about a hundred
+/// cycles each on many x86 cores, see `cloth::FOURTH_ORDER`) for moves far
+/// under what an `f32` position can hold. Dropping them changes results
+/// only in those bits (`docs/method.md`, "No subnormal numbers").
+#[inline(always)]
+pub(crate) fn forced(rot: &ForcedRotation, violation: F, d: F, beta: F, on: Mask) -> F {
+    let cut = F::splat(NEGLIGIBLE_CHANGE);
+    let fraction = scale(rot, violation, on.select(beta * d.abs(), F::ZERO));
+    let d = d * fraction.simd_lt(cut).select(F::ZERO, fraction);
+    d.abs().simd_lt(cut).select(F::ZERO, d)
+}
+
+/// The smallest multiplier change (radians, for the turning families) that
+/// [`forced`] keeps.
+pub(crate) const NEGLIGIBLE_CHANGE: f32 = 1e-20;
 
 /// [`exp_neg`](crate::solver::forced_rotation::exp_neg) in every lane,
 /// operation for operation.
@@ -551,6 +596,39 @@ pub(crate) fn clamp_unit(v: F) -> F {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn live_sets_every_bit_of_the_first_lanes_only() {
+        for n in 0..=LANES {
+            let bits = live(n).to_array().map(f32::to_bits);
+            for (k, b) in bits.into_iter().enumerate() {
+                assert_eq!(b, if k < n { u32::MAX } else { 0 }, "{n} live, lane {k}");
+            }
+        }
+    }
+
+    #[test]
+    fn forced_drops_negligible_changes_and_keeps_the_rest() {
+        let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
+        let on = live(LANES);
+        // Violations far under h: Eq. 3 leaves less than 1e-20 of the
+        // change, which is dropped; well above h the change goes through.
+        let tiny = forced(&rot, F::splat(1e-7), F::splat(1e-3), F::ONE, on);
+        assert_eq!(tiny.to_array(), [0.0; LANES]);
+        let whole = forced(&rot, F::splat(0.5), F::splat(1e-3), F::ONE, on);
+        assert_eq!(whole.to_array(), [1e-3; LANES]);
+        // A change already under the floor is dropped whatever Eq. 3 says.
+        let small = forced(&rot, F::splat(0.5), F::splat(1e-25), F::ONE, on);
+        assert_eq!(small.to_array(), [0.0; LANES]);
+        // Nothing in the result is subnormal, across violations and changes.
+        for i in 0..400 {
+            let v = 10f32.powf(-12.0 + i as f32 * 0.03);
+            for d in [1e-3f32, 1e-9, -1e-15, 3e-19] {
+                let out = forced(&rot, F::splat(v), F::splat(d), F::splat(50.0), on);
+                assert!(out.to_array().iter().all(|x| !x.is_subnormal()), "{v} {d}");
+            }
+        }
+    }
 
     #[test]
     fn lanes_match_the_scalar_functions_bit_for_bit() {

@@ -366,7 +366,7 @@ pub(crate) fn atan2(y: f32, x: f32) -> f32 {
 pub(crate) fn atan(t: f32) -> f32 {
     let a = t.abs();
     if a < 0.05 {
-        let t2 = t * t;
+        let t2 = square_above_subnormal(a);
         return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (0.2 - t2 * (1.0 / 7.0))));
     }
     if a > 1.0 {
@@ -374,6 +374,19 @@ pub(crate) fn atan(t: f32) -> f32 {
     }
     atan_poly(a).copysign(t)
 }
+
+/// `t²` for the series of a small angle, from `max(|t|, 10⁻¹⁰)`: below
+/// `10⁻⁴` the series' factor rounds to exactly 1 whatever `t²` is, so the
+/// floor changes no result, and it keeps `t²` of a flat cloth's angles
+/// (`10⁻²⁰` and less) from being subnormal (see `cloth::FOURTH_ORDER`).
+#[inline(always)]
+fn square_above_subnormal(a: f32) -> f32 {
+    let a = a.max(SMALL_ANGLE_FLOOR);
+    a * a
+}
+
+/// The floor of [`square_above_subnormal`].
+pub(crate) const SMALL_ANGLE_FLOOR: f32 = 1e-10;
 
 /// `atan(u)` for `0 ≤ u ≤ 1` by the fitted polynomial, in Estrin's scheme.
 #[inline(always)]

@@ -64,14 +64,14 @@ pub(crate) fn project<R: Recorder>(
         }
     }
     let mut m = lanes::load(mu);
-    let mut d = lanes::delta_mu(
+    let d = lanes::delta_mu(
         angle,
         w,
         F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect),
         m,
     );
     // Gradients: −axis at a, +axis at b; the larger turn is Eq. 3's to shape.
-    d *= lanes::scale(rot, angle, on.select(ba.max(bb) * d.abs(), F::ZERO));
+    let d = lanes::forced(rot, angle, d, ba.max(bb), on);
     m = on.select(m + d, m);
     lanes::store(m, mu);
     a.turn(p, qa, axis * (-ba * d), on & ba.simd_gt(0.0), rec);

@@ -134,8 +134,8 @@ fn one_side<R: Recorder>(
     let alpha = lanes::atan(sin * inv_cos);
     let axis = axis * inv_cos;
     let across = (n - dir * sin) * inv_cos;
-    let mut d = lanes::delta_mu(alpha, w, alpha_t, *mu);
-    d *= lanes::scale(rot, alpha.abs(), on.select(be * d.abs(), F::ZERO));
+    let d = lanes::delta_mu(alpha, w, alpha_t, *mu);
+    let d = lanes::forced(rot, alpha.abs(), d, be, on);
     *mu = on.select(*mu + d, *mu);
     let step = across * (d * inv_len);
     o.pos.shift(o.chunk, step * wo, on & wo.simd_gt(0.0), rec);
