@@ -519,7 +519,8 @@ pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
 /// the turns that follow would all be subnormal numbers (about a hundred
 /// cycles each on many x86 cores, see `cloth::FOURTH_ORDER`) for moves far
 /// under what an `f32` position can hold. Dropping them changes results
-/// only in those bits (`docs/method.md`, "No subnormal numbers").
+/// only in those bits (`docs/method.md`, "No subnormal numbers where Eq. 3
+/// closes").
 #[inline(always)]
 pub(crate) fn forced(rot: &ForcedRotation, violation: F, d: F, beta: F, on: Mask) -> F {
     let cut = F::splat(NEGLIGIBLE_CHANGE);
