@@ -7,8 +7,9 @@
 //! itself, so instead every thread of a [`Crew`] walks the whole chain at
 //! once, claims blocks of each batch as it comes free ([`Crew::claim`]; a
 //! fixed slice, [`Crew::share`], left one thread waiting for the other
-//! where the cloth's far part turns more) and waits at a [`Crew::barrier`]
-//! before the next. The constraints of a colour share no free particle and
+//! where the cloth's far part turns more; thread 0 claims from the front,
+//! the others from the back, so each keeps to its part of the cloth) and
+//! waits at a [`Crew::barrier`] before the next. The constraints of a colour share no free particle and
 //! each one's result does not depend on the thread that projects it, so the
 //! result does not depend on the number of threads or the split.
 //!
@@ -32,7 +33,7 @@
 //! ```
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Mutex, OnceLock};
 
 /// One thread's place in a parallel region.
@@ -67,11 +68,39 @@ impl Crew<'_> {
     /// thread handles an item must not change its result (true of a colour
     /// batch); every thread of the crew calls this until `None`, for one
     /// batch between two barriers.
+    ///
+    /// Thread 0 takes blocks from the front of the batch and the others
+    /// from the back, until they meet: a colour batch is laid out in grid
+    /// order, so each thread keeps to its own part of the cloth from one
+    /// batch to the next (its particles stay in its core's cache) while the
+    /// meeting point moves to balance the work.
     #[inline]
     pub(crate) fn claim(&self, len: usize, block: usize) -> Option<Range<usize>> {
-        let block = block.max(1);
-        let start = self.barrier.cursor().fetch_add(block, Ordering::Relaxed);
-        (start < len).then(|| start..len.min(start + block))
+        debug_assert!(len as u64 <= FRONT, "a batch of at most 2^32 - 1 items");
+        let cursor = self.barrier.cursor();
+        let mut taken = cursor.load(Ordering::Relaxed);
+        loop {
+            let (front, back) = ((taken & FRONT) as usize, (taken >> 32) as usize);
+            let left = len.saturating_sub(front + back);
+            if left == 0 {
+                return None;
+            }
+            let size = block.max(1).min(left);
+            let (range, more) = if self.index == 0 {
+                (front..front + size, size as u64)
+            } else {
+                (len - back - size..len - back, (size as u64) << 32)
+            };
+            match cursor.compare_exchange_weak(
+                taken,
+                taken + more,
+                Ordering::Relaxed,
+                Ordering::Relaxed,
+            ) {
+                Ok(_) => return Some(range),
+                Err(now) => taken = now,
+            }
+        }
     }
 
     /// Waits until every thread of the crew has arrived. Everything written
@@ -186,14 +215,19 @@ fn pool() -> &'static rayon::ThreadPool {
 struct Barrier {
     arrived: AtomicUsize,
     generation: AtomicUsize,
-    cursors: [AtomicUsize; 2],
+    /// Items taken from the front of the batch (low 32 bits) and from its
+    /// back (high 32 bits).
+    cursors: [AtomicU64; 2],
 }
+
+/// The front count of a claim cursor.
+const FRONT: u64 = u32::MAX as u64;
 
 impl Barrier {
     /// The claim cursor of the current phase (the generation cannot change
     /// while a thread of the crew is between two barriers).
     #[inline]
-    fn cursor(&self) -> &AtomicUsize {
+    fn cursor(&self) -> &AtomicU64 {
         &self.cursors[self.generation.load(Ordering::Acquire) % 2]
     }
 
@@ -251,7 +285,7 @@ mod tests {
     #[test]
     fn claims_hand_out_each_item_of_each_batch_once() {
         let lens = [37usize, 0, 8, 100, 3];
-        for threads in [1, 2] {
+        for threads in [1, 2, 3] {
             let taken = run(threads, |crew| {
                 let mut taken = Vec::new();
                 for (batch, &len) in lens.iter().enumerate() {
