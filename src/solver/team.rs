@@ -9,9 +9,10 @@
 //! fixed slice, [`Crew::share`], left one thread waiting for the other
 //! where the cloth's far part turns more; thread 0 claims from the front,
 //! the others from the back, so each keeps to its part of the cloth) and
-//! waits at a [`Crew::barrier`] before the next. The constraints of a colour share no free particle and
-//! each one's result does not depend on the thread that projects it, so the
-//! result does not depend on the number of threads or the split.
+//! waits at a [`Crew::barrier`] before the next. The constraints of a
+//! colour share no free particle and each one's result does not depend on
+//! the thread that projects it, so the result does not depend on the number
+//! of threads or the split.
 //!
 //! The threads come from one private pool, created on first use, with a
 //! thread per core. Only one region runs on it at a time (two regions
@@ -220,7 +221,7 @@ struct Barrier {
     cursors: [AtomicU64; 2],
 }
 
-/// The front count of a claim cursor.
+/// The bits of a claim cursor that count the items taken from the front.
 const FRONT: u64 = u32::MAX as u64;
 
 impl Barrier {
