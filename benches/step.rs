@@ -227,7 +227,7 @@ fn telemetry(c: &mut Criterion) {
                 }
             };
             let mut t = Telemetry::new(rec, loaded.preset.telemetry);
-            scene.solver_mut().set_diagnostics(t.needs_diagnostics());
+            t.configure(scene.solver_mut());
             t.log_static(&scene, &loaded.resolved).unwrap();
             g.bench_function(BenchmarkId::new(level, sink), |b| {
                 b.iter(|| {

@@ -136,9 +136,7 @@ impl Run {
         name: &str,
         resolved: &str,
     ) -> Result<Self, RunError> {
-        let solver = scene.solver_mut();
-        solver.set_diagnostics(telemetry.needs_diagnostics());
-        solver.record_corrections(telemetry.needs_corrections());
+        telemetry.configure(scene.solver_mut());
         let mut run = Self {
             figures: Figures {
                 preset: name.to_string(),
@@ -296,17 +294,14 @@ impl Snapshot {
 /// Folds the solver's state after a step into the running figures.
 fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
     let (strain, violations) = match solver.diagnostics() {
-        Some(d) => (
-            d.max_strain,
-            Family::ALL.map(|fam| d.family(fam).violation.max),
-        ),
+        Some(d) => (d.max_strain, d.families.map(|_, fd| fd.violation.max)),
         None => (
             solver.max_strain(),
-            Family::ALL.map(|fam| solver.measured_violation(fam).max),
+            solver.measured_violations().map(|_, v| v.max),
         ),
     };
     f.max_strain = f.max_strain.max(strain);
-    for (fam, v) in Family::ALL.iter().zip(violations) {
+    for (fam, &v) in violations.iter() {
         let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
         *slot = slot.max(v);
     }

@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use super::collision::{self, Collider, Contact, Pose};
 use super::constraints::{NoRecord, Recorder, Shared};
-use super::diagnostics::{Diagnostics, FamilyRecorder};
+use super::diagnostics::{CorrectionTrack, Diagnostics, LargestTurn, Tracking};
 use super::family::{PerFamily, SWEEP, SharedMultipliers, Sweep};
 use super::team::{self, Crew};
 
@@ -55,25 +55,31 @@ struct Times {
 
 impl Adjust<'_> {
     /// Runs the phase on up to `threads` threads, with `diagnostics` when
-    /// they are on: every family's time and the colliders', and each
-    /// particle's corrections if they are asked for.
-    pub(crate) fn run(&self, threads: usize, diagnostics: Option<&mut Diagnostics>) {
+    /// they are on: every family's time and the colliders', the largest
+    /// forced rotations if corrections are asked for, and, given a `track`
+    /// (the step's last phase), each particle's corrections.
+    pub(crate) fn run(
+        &self,
+        threads: usize,
+        diagnostics: Option<&mut Diagnostics>,
+        track: Option<&mut CorrectionTrack>,
+    ) {
         let Some(d) = diagnostics else {
-            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), false);
+            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), false, None);
             return;
         };
         let times = if d.corrections {
-            let mut recs = {
-                let mut fds = d.families.iter_mut();
-                PerFamily::from_fn(|_| FamilyRecorder::new(fds.next().expect("one per family")))
+            let mut recs = PerFamily::splat(LargestTurn::default());
+            let times = {
+                let tracking = track.map(|t| t.begin(self.sweep.p, &mut d.families));
+                self.run_recorded(threads, &mut recs, true, tracking.as_ref())
             };
-            let times = self.run_recorded(threads, &mut recs, true);
             for (fd, rec) in d.families.iter_mut().zip(recs) {
-                fd.max_rotation = fd.max_rotation.max(rec.max_rotation);
+                fd.max_rotation = fd.max_rotation.max(rec.radians());
             }
             times
         } else {
-            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), true)
+            self.run_recorded(threads, &mut PerFamily::splat(NoRecord), true, None)
         };
         for (fd, t) in d.families.iter_mut().zip(times.families) {
             fd.time += t;
@@ -82,14 +88,17 @@ impl Adjust<'_> {
     }
 
     /// Runs the phase on up to `threads` threads. Each thread records into a
-    /// fork of `recorders` (one per family), which are joined back; with
+    /// fork of `recorders` (one per family), which are joined back, and
+    /// credits its share of the particles' corrections to `tracking`; with
     /// `timed`, thread 0 returns the [`Times`].
     fn run_recorded<R: Recorder>(
         &self,
         threads: usize,
         recorders: &mut PerFamily<R>,
         timed: bool,
+        tracking: Option<&Tracking>,
     ) -> Times {
+        let p = self.sweep.p;
         let forks = team::run(threads, |crew| {
             let mut recs = recorders.map(|_, r| r.fork());
             let mut clock = (timed && crew.index() == 0).then(Clock::new);
@@ -100,18 +109,24 @@ impl Adjust<'_> {
                     }
                     self.sweep
                         .project(crew, family, &self.mu, &mut recs[family]);
+                    if let Some(t) = tracking {
+                        t.credit(crew, family, p);
+                    }
                     if let Some(c) = clock.as_mut() {
                         let t = c.lap();
                         c.times.families[family] += t;
                     }
                 }
                 if let Some(colliders) = &self.colliders {
-                    self.collide(crew, colliders);
+                    self.collide(crew, colliders, tracking);
                     if let Some(c) = clock.as_mut() {
                         let t = c.lap();
                         c.times.collisions += t;
                     }
                 }
+            }
+            if let Some(t) = tracking {
+                t.finish(crew);
             }
             (recs, clock.map(|c| c.times))
         });
@@ -127,14 +142,18 @@ impl Adjust<'_> {
         times
     }
 
-    /// Pushes this thread's share of the particles out of every collider.
-    fn collide(&self, crew: &Crew, c: &Colliders) {
+    /// Pushes this thread's share of the particles out of every collider
+    /// (a move `tracking` credits to no family).
+    fn collide(&self, crew: &Crew, c: &Colliders, tracking: Option<&Tracking>) {
         let p = self.sweep.p;
         let mine = crew.share(p.inv_mass.len());
         // SAFETY: shares are disjoint, and a particle's collider pass reads
         // and writes only that particle's position and contact.
         let (x, contacts) = unsafe { (p.x.slice(mine.clone()), c.contacts.slice(mine.clone())) };
         collision::project(x, &p.inv_mass[mine], c.shapes, c.poses, c.margin, contacts);
+        if let Some(t) = tracking {
+            t.skip(crew, p);
+        }
         crew.barrier();
     }
 }

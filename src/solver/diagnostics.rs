@@ -6,18 +6,27 @@
 //! and wall times. With diagnostics off none of this is computed: the
 //! projections are compiled with a recorder that does nothing.
 //!
-//! The measurement functions here ([`violation`], [`max_strain`],
-//! [`kinetic_energy`]) are plain functions of a state, used by diagnostics and
-//! by tests alike.
+//! The corrections cost the kernels nothing: they are read off the
+//! particles' state between sweeps ([`CorrectionTrack`]), in the last
+//! substep only. The violations are measured on the solver's threads, in
+//! blocks whose [`Tally`]s merge in a fixed order.
+//!
+//! The measurement functions here ([`max_strain`], [`kinetic_energy`],
+//! [`particle_strain`]) are plain functions of a state, used by diagnostics
+//! and by tests alike.
 
 use std::time::Duration;
 
 use glam::Vec3;
 
+use glam::Quat;
+
 use super::{
     cloth::ClothState,
-    constraints::Recorder,
+    constraints::lanes::{F, Mask, V3},
+    constraints::{Particles, Recorder, Shared, atan2},
     family::{Family, PerFamily},
+    team::Crew,
     topology::Topology,
 };
 
@@ -33,18 +42,47 @@ pub struct Violation {
 impl Violation {
     /// Max and RMS of some violations (0 for none).
     pub fn of(values: impl Iterator<Item = f32>) -> Self {
-        let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
-        for v in values {
-            max = max.max(v);
-            sum += (v as f64) * (v as f64);
-            n += 1;
-        }
+        let mut t = Tally::default();
+        values.for_each(|v| t.add(v));
+        t.violation()
+    }
+}
+
+/// A running max and sum of squares, from which a [`Violation`] is read.
+/// Tallies of consecutive runs of values merge, so a long list can be
+/// tallied in blocks on several threads: merged in block order, the result
+/// does not depend on the threads.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Tally {
+    max: f32,
+    sum: f64,
+    n: usize,
+}
+
+impl Tally {
+    /// Counts one violation.
+    #[inline]
+    pub(crate) fn add(&mut self, v: f32) {
+        self.max = self.max.max(v);
+        self.sum += (v as f64) * (v as f64);
+        self.n += 1;
+    }
+
+    /// Counts the values `other` counted, after this one's.
+    pub(crate) fn merge(&mut self, other: Tally) {
+        self.max = self.max.max(other.max);
+        self.sum += other.sum;
+        self.n += other.n;
+    }
+
+    /// Max and RMS of the values counted (0 for none).
+    pub(crate) fn violation(&self) -> Violation {
         Violation {
-            max,
-            rms: if n == 0 {
+            max: self.max,
+            rms: if self.n == 0 {
                 0.0
             } else {
-                (sum / n as f64).sqrt() as f32
+                (self.sum / self.n as f64).sqrt() as f32
             },
         }
     }
@@ -116,17 +154,6 @@ impl Diagnostics {
         &self.families[family]
     }
 
-    /// Clears per-particle corrections before an adjust phase.
-    pub(crate) fn clear_corrections(&mut self) {
-        if !self.corrections {
-            return;
-        }
-        for f in self.families.iter_mut() {
-            f.dx.fill(Vec3::ZERO);
-            f.dtheta.fill(Vec3::ZERO);
-        }
-    }
-
     /// Clears the per-step figures before a step.
     pub(crate) fn clear_step(&mut self) {
         for f in self.families.iter_mut() {
@@ -137,58 +164,169 @@ impl Diagnostics {
     }
 }
 
-/// Records one family's corrections into its diagnostics. Forks write to
-/// the same per-particle arrays (distinct particles per colour batch, see
-/// `Particles`) and keep their own largest rotation until joined.
-pub(crate) struct FamilyRecorder {
-    dx: *mut Vec3,
-    dtheta: *mut Vec3,
-    len: usize,
-    /// Largest single rotation seen by this recorder.
-    pub max_rotation: f32,
+/// Records the largest forced rotation a family applies, as its square
+/// (lane by lane for the kernels that turn eight particles at once); one
+/// per thread, joined after the phase.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct LargestTurn {
+    squared: f32,
+    lanes: F,
 }
 
-// SAFETY: forks on other threads write distinct elements only (colouring);
-// sharing a recorder only lets other threads fork it (copy its pointers).
-unsafe impl Send for FamilyRecorder {}
-unsafe impl Sync for FamilyRecorder {}
-
-impl FamilyRecorder {
-    /// A recorder writing into `fd`'s arrays (which must outlive it).
-    pub(crate) fn new(fd: &mut FamilyDiagnostics) -> Self {
-        Self {
-            dx: fd.dx.as_mut_ptr(),
-            dtheta: fd.dtheta.as_mut_ptr(),
-            len: fd.dx.len().min(fd.dtheta.len()),
-            max_rotation: 0.0,
-        }
+impl LargestTurn {
+    /// The largest rotation recorded, in radians.
+    pub(crate) fn radians(&self) -> f32 {
+        let lanes = self.lanes.to_array().into_iter().fold(0.0, f32::max);
+        self.squared.max(lanes).sqrt()
     }
 }
 
-impl Recorder for FamilyRecorder {
+impl Recorder for LargestTurn {
     const ON: bool = true;
     #[inline]
-    fn moved(&mut self, i: usize, dx: Vec3) {
-        assert!(i < self.len);
-        // SAFETY: in bounds; this particle is this thread's in the batch.
-        unsafe { *self.dx.add(i) += dx }
+    fn turned(&mut self, omega: Vec3) {
+        self.squared = self.squared.max(omega.length_squared());
     }
     #[inline]
-    fn turned(&mut self, i: usize, axis_angle: Vec3) {
-        assert!(i < self.len);
-        // SAFETY: in bounds; this particle is this thread's in the batch.
-        unsafe { *self.dtheta.add(i) += axis_angle }
-        self.max_rotation = self.max_rotation.max(axis_angle.length());
+    fn turned_lanes(&mut self, omega: V3, mask: Mask) {
+        let squared = mask.select(omega.length_squared(), F::ZERO);
+        self.lanes = self.lanes.max(squared);
     }
     fn fork(&self) -> Self {
-        Self {
-            max_rotation: 0.0,
-            ..*self
-        }
+        Self::default()
     }
     fn join(&mut self, other: Self) {
-        self.max_rotation = self.max_rotation.max(other.max_rotation);
+        self.squared = self.squared.max(other.squared);
+        self.lanes = self.lanes.max(other.lanes);
     }
+}
+
+/// What each particle was moved and turned by, read off its state around
+/// each family's sweeps rather than recorded by the kernels: after a sweep,
+/// the family is credited with each particle's position less the one it had
+/// before the sweep, and with its orientation times the inverse of the one
+/// before. The kernels stay as fast as with diagnostics off; one pass over
+/// the particles per sweep does the bookkeeping.
+///
+/// `δx` is then the sum of the family's moves over the phase, and `δθ` the
+/// rotation its turns compose to, as axis × angle. The buffers are kept
+/// between phases.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct CorrectionTrack {
+    /// Each particle's position and orientation when last credited.
+    x: Vec<Vec3>,
+    q: Vec<Quat>,
+    /// Per family, the turns composed so far.
+    turns: PerFamily<Vec<Quat>>,
+}
+
+impl CorrectionTrack {
+    /// Starts tracking an adjust phase from the particles' state: zeroes
+    /// every family's corrections in `families`, which the returned view
+    /// writes until it is dropped.
+    pub(crate) fn begin<'a>(
+        &'a mut self,
+        p: &Particles,
+        families: &'a mut PerFamily<FamilyDiagnostics>,
+    ) -> Tracking<'a> {
+        let n = p.inv_mass.len();
+        self.x.clear();
+        self.x.extend((0..n).map(|i| p.x(i)));
+        self.q.clear();
+        self.q.extend((0..n).map(|i| p.q(i)));
+        for turns in self.turns.iter_mut() {
+            turns.clear();
+            turns.resize(n, Quat::IDENTITY);
+        }
+        let mut fds = families.iter_mut();
+        let mut turns = self.turns.iter_mut();
+        let sides = PerFamily::from_fn(|_| {
+            let fd = fds.next().expect("one per family");
+            fd.dx.fill(Vec3::ZERO);
+            fd.dtheta.fill(Vec3::ZERO);
+            Sides {
+                dx: Shared::new(&mut fd.dx),
+                dtheta: Shared::new(&mut fd.dtheta),
+                turns: Shared::new(turns.next().expect("one per family")),
+            }
+        });
+        Tracking {
+            x: Shared::new(&mut self.x),
+            q: Shared::new(&mut self.q),
+            families: sides,
+        }
+    }
+}
+
+/// One family's arrays, as a phase's crew writes them.
+struct Sides<'a> {
+    dx: Shared<'a, Vec3>,
+    dtheta: Shared<'a, Vec3>,
+    turns: Shared<'a, Quat>,
+}
+
+/// An adjust phase's view of a [`CorrectionTrack`]. Each thread of the
+/// crew credits its own share of the particles ([`Crew::share`]), the same
+/// share every time, so no two threads touch the same element.
+pub(crate) struct Tracking<'a> {
+    x: Shared<'a, Vec3>,
+    q: Shared<'a, Quat>,
+    families: PerFamily<Sides<'a>>,
+}
+
+impl Tracking<'_> {
+    /// Credits `family` with what happened to this thread's share since it
+    /// was last credited, then waits for the crew (the next sweep may move
+    /// any particle). Called after the family's sweep.
+    pub(crate) fn credit(&self, crew: &Crew, family: Family, p: &Particles) {
+        let f = &self.families[family];
+        for i in crew.share(self.x.len()) {
+            let (x, q) = (p.x(i), p.q(i));
+            // SAFETY: in bounds (a share of the particles); this thread's
+            // share only, and the same share on every call.
+            unsafe {
+                let (x0, q0) = (self.x.get(i), self.q.get(i));
+                *f.dx.get(i) += x - *x0;
+                let turns = f.turns.get(i);
+                *turns = q * q0.conjugate() * *turns;
+                (*x0, *q0) = (x, q);
+            }
+        }
+        crew.barrier();
+    }
+
+    /// Takes this thread's share of the positions as they are, crediting no
+    /// family (after the colliders, which only move particles).
+    pub(crate) fn skip(&self, crew: &Crew, p: &Particles) {
+        for i in crew.share(self.x.len()) {
+            // SAFETY: as in `credit`.
+            unsafe { *self.x.get(i) = p.x(i) }
+        }
+    }
+
+    /// Writes this thread's share of every family's `δθ`, the phase over.
+    pub(crate) fn finish(&self, crew: &Crew) {
+        for f in self.families.iter().map(|(_, f)| f) {
+            for i in crew.share(self.x.len()) {
+                // SAFETY: as in `credit`.
+                unsafe { *f.dtheta.get(i) = rotation_vector(*f.turns.get(i)) }
+            }
+        }
+    }
+}
+
+/// The rotation vector (axis × angle, the angle in `[0, π]`) of the
+/// rotation `q` stands for; `q` need not be exactly of unit length. The
+/// angle comes from `atan2`, which keeps full precision for the tiny angles
+/// a sweep turns by (an `acos` of `w` would round them to 0).
+fn rotation_vector(q: Quat) -> Vec3 {
+    let q = if q.w < 0.0 { -q } else { q };
+    let axis = q.xyz();
+    let s = axis.length();
+    if s == 0.0 {
+        return Vec3::ZERO;
+    }
+    axis * (2.0 * atan2(s, q.w) / s)
 }
 
 /// The largest strain (elongation `(|s| − L) / L`, 0 when compressed) of a

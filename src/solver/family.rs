@@ -26,10 +26,10 @@ use super::constraints::self_collision::{self, SelfContact};
 use super::constraints::{
     Particles, Recorder, Shared, curvature, normality, planarity, project_batches, stretch,
 };
-use super::diagnostics::Violation;
+use super::diagnostics::{Tally, Violation};
 use super::forced_rotation::ForcedRotation;
 use super::params::{REFERENCE_COMPLIANCE, compliance_factor};
-use super::team::Crew;
+use super::team::{self, Crew};
 use super::topology::{Batched, Pair, Topology};
 
 /// The constraint families of the adjust phase.
@@ -419,7 +419,7 @@ impl Sweep<'_> {
                     &mu.structural,
                     &structural.batches,
                     rec,
-                    |c, m, n, r| stretch::project(p, c, m, n, k.stretch, r),
+                    |c, m, n, _| stretch::project(p, c, m, n, k.stretch),
                 );
                 // Each particle appears once per tether batch.
                 project_batches(
@@ -428,7 +428,7 @@ impl Sweep<'_> {
                     &mu.tethers,
                     &tethers.batches,
                     rec,
-                    |t, m, n, r| stretch::project_tethers(p, t, m, n, k.stretch, r),
+                    |t, m, n, _| stretch::project_tethers(p, t, m, n, k.stretch),
                 );
             }
             Family::Planarity => {
@@ -456,7 +456,7 @@ impl Sweep<'_> {
                     &mu.shear,
                     &shear.batches,
                     rec,
-                    |c, m, n, r| stretch::project(p, c, m, n, k.shear, r),
+                    |c, m, n, _| stretch::project(p, c, m, n, k.shear),
                 );
             }
             Family::Curvature => {
@@ -476,9 +476,9 @@ impl Sweep<'_> {
                     &mu.self_contact,
                     &contacts.batches,
                     rec,
-                    |cs, ms, n, r| {
+                    |cs, ms, n, _| {
                         for (&c, m) in cs.iter().zip(ms).take(n) {
-                            self_collision::project(p, c, m, thickness, k.self_contact, r);
+                            self_collision::project(p, c, m, thickness, k.self_contact);
                         }
                     },
                 );
@@ -514,6 +514,57 @@ pub fn violation(
             Violation::of(depths.into_iter())
         }
     }
+}
+
+/// Every family's violation, as [`violation`] measures each, on up to
+/// `threads` threads (self-collision's only with `self_collision`, else 0).
+/// The structural pairs are measured once for the three families that share
+/// them, in blocks whose tallies merge in block order, so the figures do not
+/// depend on the threads.
+pub fn violations(
+    state: &ClothState,
+    topology: &Topology,
+    spec: &ClothSpec,
+    threads: usize,
+    self_collision: bool,
+) -> PerFamily<Violation> {
+    const BLOCK: usize = 1024;
+    let x = &state.position;
+    let normal = |i| state.normal(i);
+    let pairs = &topology.structural.items;
+    let bends = &topology.bend.items;
+    let mut of_pairs = [Tally::default(); 3];
+    for block in team::run_blocks(threads, pairs.len(), BLOCK, |r| {
+        let mut t = [Tally::default(); 3];
+        for &p in &pairs[r] {
+            t[0].add(stretch::violation(x, p));
+            t[1].add(planarity::violation(x, normal, p));
+            t[2].add(normality::violation(normal, p));
+        }
+        t
+    }) {
+        for (all, t) in of_pairs.iter_mut().zip(block) {
+            all.merge(t);
+        }
+    }
+    let mut of_bends = Tally::default();
+    for t in team::run_blocks(threads, bends.len(), BLOCK, |r| {
+        let mut t = Tally::default();
+        bends[r]
+            .iter()
+            .for_each(|&b| t.add(curvature::violation(x, b)));
+        t
+    }) {
+        of_bends.merge(t);
+    }
+    PerFamily::from_fn(|family| match family {
+        Family::Stretch => of_pairs[0].violation(),
+        Family::Planarity => of_pairs[1].violation(),
+        Family::Normality => of_pairs[2].violation(),
+        Family::Curvature => of_bends.violation(),
+        Family::SelfCollision if self_collision => violation(family, state, topology, spec),
+        Family::SelfCollision => Violation::default(),
+    })
 }
 
 /// Per particle, the largest violation of `family` over the constraints

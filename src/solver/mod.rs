@@ -71,6 +71,7 @@ use adjust::{Adjust, Colliders};
 use collision::Contact;
 use constraints::self_collision::{self, Layers, SelfContacts};
 use constraints::{Particles, Shared, stretch};
+use diagnostics::CorrectionTrack;
 use family::{Compliance, Multipliers, Sweep};
 use update::{FREE, Reference};
 
@@ -181,6 +182,8 @@ pub struct Solver {
     time: f64,
     steps: u64,
     diagnostics: Option<Box<Diagnostics>>,
+    /// Scratch for reading the corrections off the state (diagnostics).
+    track: CorrectionTrack,
 }
 
 impl Solver {
@@ -219,6 +222,7 @@ impl Solver {
             time: 0.0,
             steps: 0,
             diagnostics: None,
+            track: CorrectionTrack::default(),
             spec,
             params,
         })
@@ -418,14 +422,18 @@ impl Solver {
         family::violation(family, &self.state, &self.topology, &self.spec)
     }
 
-    /// The violation a run's figures report for `family`: as
-    /// [`Solver::violation`], but self-collision's only while the family is
-    /// on (its measure is a contact search; off, it reports 0).
-    pub fn measured_violation(&self, family: Family) -> Violation {
-        if family == Family::SelfCollision && !self.self_collision_on() {
-            return Violation::default();
-        }
-        self.violation(family)
+    /// The violations a run's figures report: as [`Solver::violation`] for
+    /// every family, but self-collision's only while the family is on (its
+    /// measure is a contact search; off, it reports 0). Measured on the
+    /// solver's threads.
+    pub fn measured_violations(&self) -> PerFamily<Violation> {
+        family::violations(
+            &self.state,
+            &self.topology,
+            &self.spec,
+            self.threads(),
+            self.self_collision_on(),
+        )
     }
 
     /// Per particle, the largest violation of `family` among the
@@ -501,7 +509,7 @@ impl Solver {
                 self.sub_from.push(from.lerp(to, f0));
                 self.sub_to.push(from.lerp(to, f1));
             }
-            let result = self.substep(env, dt, &rot);
+            let result = self.substep(env, dt, &rot, sub + 1 == substeps);
             std::mem::swap(&mut self.last_from, &mut self.sub_from);
             if let Err((phase, particle, quantity, value)) = result {
                 self.state.copy_from(&self.last_good);
@@ -523,11 +531,11 @@ impl Solver {
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
-            let violations = Family::ALL.map(|f| self.measured_violation(f));
+            let violations = self.measured_violations();
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.self_crossings = crossings;
-            for (f, v) in Family::ALL.into_iter().zip(violations) {
-                d.families[f].violation = v;
+            for (fd, v) in d.families.iter_mut().zip(violations) {
+                fd.violation = v;
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
             d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);
@@ -544,6 +552,7 @@ impl Solver {
         env: &Environment,
         dt: f32,
         rot: &ForcedRotation,
+        last: bool,
     ) -> Result<(), NonFinite> {
         if self.self_collision_on() && self.self_contacts.leave_tangles_this_substep() {
             self.find_tangles();
@@ -569,7 +578,6 @@ impl Solver {
         self.check_finite("update")?;
         if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
             d.timings.update += t.elapsed();
-            d.clear_corrections();
         }
 
         self.collider_from.clear();
@@ -616,7 +624,11 @@ impl Solver {
                 contacts: Shared::new(&mut self.contacts),
             }),
         };
-        adjust.run(threads, self.diagnostics.as_deref_mut());
+        adjust.run(
+            threads,
+            self.diagnostics.as_deref_mut(),
+            last.then_some(&mut self.track),
+        );
         if !self.self_contacts.set.is_empty() {
             self_collision::apply_friction(
                 &mut self.state.position,

@@ -26,6 +26,7 @@
 //!
 //! Timelines: `frame` (sequence) and `sim_time` (seconds).
 
+mod batch;
 pub mod blueprint;
 pub mod color;
 pub mod paths;
@@ -40,7 +41,7 @@ use crate::scene::{
     Scene, Tuning,
     preset::{Level, ShapeKind, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, Pose, StepError};
+use crate::solver::{Diagnostics, Family, Pose, Solver, StepError};
 
 /// Streams a scene to a Rerun recording.
 pub struct Telemetry {
@@ -96,6 +97,13 @@ impl Telemetry {
     /// corrections: for the arrows (level full) and for colouring by them.
     pub fn needs_corrections(&self) -> bool {
         self.settings.level == Level::Full || self.settings.color_by.uses_corrections()
+    }
+
+    /// Has `solver` collect the diagnostics this telemetry logs, and no
+    /// more (they cost the step time).
+    pub fn configure(&self, solver: &mut Solver) {
+        solver.set_diagnostics(self.needs_diagnostics());
+        solver.record_corrections(self.needs_corrections());
     }
 
     /// Whether frame `frame` is logged.
@@ -391,25 +399,19 @@ impl Telemetry {
         let radius = 0.25 * solver.spec().spacing().0.min(solver.spec().spacing().1);
         rec.log(
             paths::PARTICLES,
-            &rerun::Points3D::new(x.iter().copied())
+            &batch::points(x)
                 .with_colors(colours.iter().copied())
                 .with_radii([radius]),
         )?;
 
         if self.settings.level == Level::Full {
-            let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
-            rec.log(
-                paths::MESH,
-                &rerun::Mesh3D::update_fields()
-                    .with_vertex_positions(x.iter().copied())
-                    .with_vertex_normals(normals.iter().copied()),
-            )?;
+            let mut normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
+            rec.log(paths::MESH, &batch::mesh_update(x, &normals))?;
             let len = 2.0 * radius;
+            normals.iter_mut().for_each(|n| *n *= len);
             rec.log(
                 paths::NORMALS,
-                &rerun::Arrows3D::from_vectors(normals.iter().map(|n| *n * len))
-                    .with_origins(x.iter().copied())
-                    .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
+                &batch::arrows(x, &normals).with_colors([rerun::Color::from_rgb(90, 160, 255)]),
             )?;
             if let Some(d) = diag {
                 self.log_corrections(x, d)?;
@@ -477,9 +479,7 @@ impl Telemetry {
                     .unzip();
                 self.rec.log(
                     paths::correction(f, kind),
-                    &rerun::Arrows3D::from_vectors(arrows)
-                        .with_origins(origins)
-                        .with_colors([color::family(f)]),
+                    &batch::arrows(&origins, &arrows).with_colors([color::family(f)]),
                 )?;
             }
         }

@@ -82,9 +82,9 @@ pub(crate) fn project<R: Recorder>(
         let d = lanes::delta_mu(c, w, alpha_t, mus[0]);
         mus[0] = on.select(mus[0] + d, mus[0]);
         let step = across * (d * inv_half);
-        m.shift(p, step * (F::splat(2.0) * wm), on & wm.simd_gt(0.0), rec);
-        a.shift(p, step * -wa, on & wa.simd_gt(0.0), rec);
-        b.shift(p, step * -wb, on & wb.simd_gt(0.0), rec);
+        m.shift(p, step * (F::splat(2.0) * wm), on & wm.simd_gt(0.0));
+        a.shift(p, step * -wa, on & wa.simd_gt(0.0));
+        b.shift(p, step * -wb, on & wb.simd_gt(0.0));
     }
 
     // Rotation: the ends' normals toward each other about the bending axis

@@ -27,7 +27,7 @@
 use glam::{Quat, Vec3};
 use wide::f32x8;
 
-use super::{ATAN_POLY, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, turn};
+use super::{ATAN_POLY, NoRecord, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, turn};
 use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
 use crate::solver::forced_rotation::ForcedRotation;
 
@@ -104,11 +104,11 @@ impl Chunk {
 
     /// Moves each lane's particle by its `dx`, in the lanes of `mask`.
     #[inline(always)]
-    pub(crate) fn shift<R: Recorder>(&self, p: &Particles, dx: V3, mask: Mask, rec: &mut R) {
+    pub(crate) fn shift(&self, p: &Particles, dx: V3, mask: Mask) {
         let bits = mask.to_bitmask();
         for k in 0..LANES {
             if bits & (1 << k) != 0 {
-                shift(p, self.idx[k], dx.lane(k), rec);
+                shift(p, self.idx[k], dx.lane(k));
             }
         }
     }
@@ -129,6 +129,9 @@ impl Chunk {
         if bits == 0 {
             return;
         }
+        if R::ON {
+            rec.turned_lanes(omega, mask);
+        }
         let (turned, series) = turn_by(q, omega);
         let series = series.to_bitmask();
         for k in 0..LANES {
@@ -137,13 +140,10 @@ impl Chunk {
             }
             let i = self.idx[k];
             if series & (1 << k) == 0 {
-                turn(p, i, omega.lane(k), rec);
+                turn(p, i, omega.lane(k), &mut NoRecord);
                 continue;
             }
             p.set_q(i, turned.lane(k));
-            if R::ON {
-                rec.turned(i, omega.lane(k));
-            }
         }
     }
 }
@@ -170,15 +170,9 @@ impl Held {
 
     /// Moves each lane's position by its `dx`, in the lanes of `mask`.
     #[inline(always)]
-    pub(crate) fn shift<R: Recorder>(&mut self, chunk: &Chunk, dx: V3, mask: Mask, rec: &mut R) {
+    pub(crate) fn shift(&mut self, dx: V3, mask: Mask) {
         self.x = V3::select(mask, self.x + dx, self.x);
         self.moved |= mask;
-        if R::ON {
-            let bits = mask.to_bitmask();
-            for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
-                rec.moved(chunk.at(k), dx.lane(k));
-            }
-        }
     }
 
     /// Writes the moved lanes' positions back.

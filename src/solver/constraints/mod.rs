@@ -169,15 +169,18 @@ impl<'a> Particles<'a> {
     }
 }
 
-/// Receives the corrections a projection applies (for diagnostics). Each
-/// thread has its own recorder; its per-particle writes follow the same
-/// colour discipline as [`Particles`].
+/// Receives the forced rotations a projection applies (for diagnostics:
+/// the largest one). Each thread has its own recorder. What each particle
+/// is moved and turned by is read off its state around each family's sweep
+/// instead (see `adjust`), which costs the kernels nothing.
 pub(crate) trait Recorder: Send + Sync {
     /// Whether anything is recorded; lets the compiler drop the calls.
     const ON: bool;
-    fn moved(&mut self, i: usize, dx: Vec3);
-    fn turned(&mut self, i: usize, axis_angle: Vec3);
-    /// A recorder for another thread, writing to the same place.
+    /// A turn by the rotation vector `omega` (axis × angle).
+    fn turned(&mut self, omega: Vec3);
+    /// Turns by the rotation vectors `omega`, in the lanes of `mask`.
+    fn turned_lanes(&mut self, omega: lanes::V3, mask: lanes::Mask);
+    /// A recorder for another thread.
     fn fork(&self) -> Self;
     /// Takes in what a forked recorder gathered (order does not matter).
     fn join(&mut self, other: Self);
@@ -190,9 +193,9 @@ pub(crate) struct NoRecord;
 impl Recorder for NoRecord {
     const ON: bool = false;
     #[inline(always)]
-    fn moved(&mut self, _: usize, _: Vec3) {}
+    fn turned(&mut self, _: Vec3) {}
     #[inline(always)]
-    fn turned(&mut self, _: usize, _: Vec3) {}
+    fn turned_lanes(&mut self, _: lanes::V3, _: lanes::Mask) {}
     fn fork(&self) -> Self {
         NoRecord
     }
@@ -321,17 +324,14 @@ fn project_range<T, M, R>(
 pub(crate) fn turn<R: Recorder>(p: &Particles, i: usize, omega: Vec3, rec: &mut R) {
     p.set_q(i, turn_by(p.q(i), omega));
     if R::ON {
-        rec.turned(i, omega);
+        rec.turned(omega);
     }
 }
 
 /// Moves particle `i` by `dx`.
 #[inline]
-pub(crate) fn shift<R: Recorder>(p: &Particles, i: usize, dx: Vec3, rec: &mut R) {
+pub(crate) fn shift(p: &Particles, i: usize, dx: Vec3) {
     p.set_x(i, p.x(i) + dx);
-    if R::ON {
-        rec.moved(i, dx);
-    }
 }
 
 /// `atan2(y, x)`, without a libm call: [`atan`] of `y / x` with the

@@ -138,8 +138,8 @@ fn one_side<R: Recorder>(
     let d = lanes::forced(rot, alpha.abs(), d, be, on);
     *mu = on.select(*mu + d, *mu);
     let step = across * (d * inv_len);
-    o.pos.shift(o.chunk, step * wo, on & wo.simd_gt(0.0), rec);
-    e.pos.shift(e.chunk, step * -we, on & we.simd_gt(0.0), rec);
+    o.pos.shift(step * wo, on & wo.simd_gt(0.0));
+    e.pos.shift(step * -we, on & we.simd_gt(0.0));
     e.chunk
         .turn(p, q, axis * (be * d), on & be.simd_gt(0.0), rec);
 }

@@ -43,7 +43,7 @@
 use glam::Vec3;
 
 use super::lanes::{F, LANES, V3, each};
-use super::{Particles, Recorder, delta_mu, shift};
+use super::{Particles, delta_mu, shift};
 use crate::solver::broad_phase::{self, NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
 use crate::solver::team;
@@ -217,14 +217,7 @@ impl Foot {
 /// Projects one contact, keeping the layers `thickness` apart, with
 /// compliance `alpha_t` (`α / Δt²`).
 #[inline]
-pub(crate) fn project<R: Recorder>(
-    p: &Particles,
-    c: SelfContact,
-    mu: &mut f32,
-    thickness: f32,
-    alpha_t: f32,
-    rec: &mut R,
-) {
+pub(crate) fn project(p: &Particles, c: SelfContact, mu: &mut f32, thickness: f32, alpha_t: f32) {
     let i = c.particle as usize;
     let t = c.triangle.map(|k| k as usize);
     let Some(foot) = Foot::of(p.x(i), t.map(|k| p.x(k))) else {
@@ -250,11 +243,11 @@ pub(crate) fn project<R: Recorder>(
     *mu += d;
     let dir = n * (c.side * d);
     if wp > 0.0 {
-        shift(p, i, dir * wp, rec);
+        shift(p, i, dir * wp);
     }
     for k in 0..3 {
         if wt[k] > 0.0 {
-            shift(p, t[k], dir * (-b[k] * wt[k]), rec);
+            shift(p, t[k], dir * (-b[k] * wt[k]));
         }
     }
 }

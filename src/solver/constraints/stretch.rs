@@ -20,21 +20,20 @@
 
 use glam::Vec3;
 
+use super::Particles;
 use super::lanes::{self, Chunk, F, LANES};
-use super::{Particles, Recorder};
 use crate::solver::topology::Pair;
 
 /// Projects up to [`LANES`](lanes::LANES) distance constraints of one colour
 /// side by side, with compliance `alpha_t` (`α / Δt²` for a square cell;
 /// divided by each pair's aspect).
 #[inline]
-pub(crate) fn project<R: Recorder>(
+pub(crate) fn project(
     p: &Particles,
     pairs: &[Pair; LANES],
     mu: &mut [f32; LANES],
     live: usize,
     alpha_t: f32,
-    rec: &mut R,
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
     let (wa, wb) = (a.gather(p.inv_mass), b.gather(p.inv_mass));
@@ -51,8 +50,8 @@ pub(crate) fn project<R: Recorder>(
     let d = lanes::delta_mu(len - rest, w, alpha_t, m);
     lanes::store(on.select(m + d, m), mu);
     let dir = s * (d * (F::ONE / len));
-    a.shift(p, dir * -wa, on & wa.simd_gt(0.0), rec);
-    b.shift(p, dir * wb, on & wb.simd_gt(0.0), rec);
+    a.shift(p, dir * -wa, on & wa.simd_gt(0.0));
+    b.shift(p, dir * wb, on & wb.simd_gt(0.0));
 }
 
 /// One free particle's limit on its distance from a driven particle.
@@ -72,13 +71,12 @@ pub struct Tether {
 /// Projects up to [`LANES`](lanes::LANES) tethers of one batch side by
 /// side: pulls each particle back if it is too far.
 #[inline]
-pub(crate) fn project_tethers<R: Recorder>(
+pub(crate) fn project_tethers(
     p: &Particles,
     tethers: &[Tether; LANES],
     mu: &mut [f32; LANES],
     live: usize,
     alpha_t: f32,
-    rec: &mut R,
 ) {
     let (i, anchor) = (
         Chunk::of(tethers, |t| t.particle),
@@ -98,7 +96,7 @@ pub(crate) fn project_tethers<R: Recorder>(
     let next = (m + lanes::delta_mu(len - rest, w, alpha_t, m)).min(F::ZERO);
     let d = next - m;
     lanes::store(on.select(next, m), mu);
-    i.shift(p, s * (w * d / len), on & !d.simd_eq(0.0), rec);
+    i.shift(p, s * (w * d / len), on & !d.simd_eq(0.0));
 }
 
 /// Tethers in two batches: every free particle's tether to its nearest
