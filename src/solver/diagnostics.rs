@@ -364,3 +364,97 @@ pub fn particle_strain(state: &ClothState, topology: &Topology) -> Vec<f32> {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::constraints::{NoRecord, shift, turn};
+    use crate::solver::team;
+
+    #[test]
+    fn corrections_are_credited_to_the_family_whose_sweep_made_them() {
+        let n = 3;
+        let (mut x, mut q) = (vec![Vec3::ZERO; n], vec![Quat::IDENTITY; n]);
+        let ones = vec![1.0; n];
+        // Stale corrections from an earlier phase, which `begin` clears.
+        let mut families = PerFamily::from_fn(|_| FamilyDiagnostics {
+            dx: vec![Vec3::ONE; n],
+            dtheta: vec![Vec3::ONE; n],
+            ..FamilyDiagnostics::default()
+        });
+        let about_z = |angle: f32| Vec3::new(0.0, 0.0, angle);
+        let mut track = CorrectionTrack::default();
+        let p = Particles::new(&mut x, &mut q, &ones, &ones);
+        {
+            let t = track.begin(&p, &mut families);
+            team::run(1, |crew| {
+                shift(&p, 0, Vec3::X);
+                turn(&p, 1, about_z(0.1), &mut NoRecord);
+                t.credit(crew, Family::Stretch, &p);
+                shift(&p, 0, Vec3::Y);
+                turn(&p, 1, about_z(0.2), &mut NoRecord);
+                t.credit(crew, Family::Planarity, &p);
+                // A collider's move: no family's.
+                shift(&p, 2, Vec3::Z);
+                t.skip(crew, &p);
+                shift(&p, 0, Vec3::X);
+                turn(&p, 1, about_z(0.3), &mut NoRecord);
+                t.credit(crew, Family::Stretch, &p);
+                t.finish(crew);
+            });
+        }
+        let (stretch, planarity) = (&families[Family::Stretch], &families[Family::Planarity]);
+        assert_eq!(stretch.dx, [2.0 * Vec3::X, Vec3::ZERO, Vec3::ZERO]);
+        assert_eq!(planarity.dx, [Vec3::Y, Vec3::ZERO, Vec3::ZERO]);
+        assert!(
+            stretch.dtheta[1].abs_diff_eq(about_z(0.4), 1e-6),
+            "{:?}",
+            stretch.dtheta
+        );
+        assert!(
+            planarity.dtheta[1].abs_diff_eq(about_z(0.2), 1e-6),
+            "{:?}",
+            planarity.dtheta
+        );
+        assert_eq!(stretch.dtheta[0], Vec3::ZERO);
+        for f in [Family::Normality, Family::Curvature, Family::SelfCollision] {
+            assert!(
+                families[f]
+                    .dx
+                    .iter()
+                    .chain(&families[f].dtheta)
+                    .all(|v| *v == Vec3::ZERO)
+            );
+        }
+    }
+
+    #[test]
+    fn rotation_vectors_keep_tiny_angles() {
+        for angle in [1e-7f32, 1e-3, 0.5, 3.0] {
+            let q = Quat::from_axis_angle(Vec3::Y, angle);
+            let r = rotation_vector(q);
+            assert!(
+                (r.y - angle).abs() <= 1e-6 * angle.max(1.0),
+                "{angle}: {r:?}"
+            );
+            // The same rotation, as the other of its two quaternions.
+            assert!(rotation_vector(-q).abs_diff_eq(r, 1e-6 * angle.max(1.0)));
+        }
+        assert_eq!(rotation_vector(Quat::IDENTITY), Vec3::ZERO);
+    }
+
+    #[test]
+    fn tallies_merged_in_blocks_equal_one_tally() {
+        let values: Vec<f32> = (0..1000).map(|k| (k as f32 * 0.37).sin().abs()).collect();
+        let whole = Violation::of(values.iter().copied());
+        let mut merged = Tally::default();
+        for block in values.chunks(64) {
+            let mut t = Tally::default();
+            block.iter().for_each(|&v| t.add(v));
+            merged.merge(t);
+        }
+        assert_eq!(merged.violation().max, whole.max);
+        assert!((merged.violation().rms - whole.rms).abs() <= 1e-6 * whole.rms);
+        assert_eq!(Violation::of(std::iter::empty()), Violation::default());
+    }
+}

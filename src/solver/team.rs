@@ -331,6 +331,30 @@ mod tests {
     }
 
     #[test]
+    fn a_barrier_wakes_threads_that_fell_asleep_waiting() {
+        use std::sync::atomic::AtomicU64;
+        let counter = AtomicU64::new(0);
+        let seen = run(2, |crew| {
+            let mut seen = Vec::new();
+            for _ in 0..5 {
+                // Thread 0 comes late: the others outlast their spins and sleep.
+                if crew.index() == 0 {
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                }
+                counter.fetch_add(1, Ordering::Relaxed);
+                crew.barrier();
+                seen.push(counter.load(Ordering::Relaxed));
+                crew.barrier();
+            }
+            seen
+        });
+        let size = seen.len() as u64;
+        for s in &seen {
+            assert_eq!(s, &(1..=5).map(|phase| phase * size).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
     fn a_barrier_orders_phases() {
         use std::sync::atomic::AtomicU64;
         let counter = AtomicU64::new(0);
