@@ -330,37 +330,18 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_barrier_wakes_threads_that_fell_asleep_waiting() {
+    /// Runs `phases` phases on two threads, each adding one to a counter
+    /// before a barrier and reading it after (thread 0 first waits `late`),
+    /// and checks every thread read every thread's additions, no more.
+    fn check_phases(phases: u64, late: std::time::Duration) {
         use std::sync::atomic::AtomicU64;
         let counter = AtomicU64::new(0);
         let seen = run(2, |crew| {
             let mut seen = Vec::new();
-            for _ in 0..5 {
-                // Thread 0 comes late: the others outlast their spins and sleep.
+            for _ in 0..phases {
                 if crew.index() == 0 {
-                    std::thread::sleep(std::time::Duration::from_millis(5));
+                    std::thread::sleep(late);
                 }
-                counter.fetch_add(1, Ordering::Relaxed);
-                crew.barrier();
-                seen.push(counter.load(Ordering::Relaxed));
-                crew.barrier();
-            }
-            seen
-        });
-        let size = seen.len() as u64;
-        for s in &seen {
-            assert_eq!(s, &(1..=5).map(|phase| phase * size).collect::<Vec<_>>());
-        }
-    }
-
-    #[test]
-    fn a_barrier_orders_phases() {
-        use std::sync::atomic::AtomicU64;
-        let counter = AtomicU64::new(0);
-        let seen = run(2, |crew| {
-            let mut seen = Vec::new();
-            for _ in 0..100 {
                 counter.fetch_add(1, Ordering::Relaxed);
                 crew.barrier();
                 seen.push(counter.load(Ordering::Relaxed));
@@ -371,9 +352,18 @@ mod tests {
         let size = seen.len() as u64;
         assert_eq!(size, available().min(2) as u64);
         for s in &seen {
-            for (phase, &v) in s.iter().enumerate() {
-                assert_eq!(v, (phase as u64 + 1) * size);
-            }
+            assert_eq!(s, &(1..=phases).map(|p| p * size).collect::<Vec<_>>());
         }
+    }
+
+    #[test]
+    fn a_barrier_orders_phases() {
+        check_phases(100, std::time::Duration::ZERO);
+    }
+
+    #[test]
+    fn a_barrier_wakes_threads_that_fell_asleep_waiting() {
+        // Thread 0 comes late: the others outlast their spins and sleep.
+        check_phases(5, std::time::Duration::from_millis(5));
     }
 }
