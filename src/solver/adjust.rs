@@ -14,6 +14,10 @@
 //! Thread 0 times the families and the colliders for the diagnostics: the
 //! time from the end of one section to the end of the next, barriers
 //! included, which is the wall time the section costs the step.
+//!
+//! In the step's last phase, with corrections asked for, every thread also
+//! credits each family's sweep with what it did to the thread's share of
+//! the particles ([`Tracking`]), and waits for the crew before the next.
 
 use std::time::{Duration, Instant};
 

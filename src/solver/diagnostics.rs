@@ -242,6 +242,11 @@ impl CorrectionTrack {
         let mut turns = self.turns.iter_mut();
         let sides = PerFamily::from_fn(|_| {
             let fd = fds.next().expect("one per family");
+            // The crew writes these through raw views: one slot per particle.
+            assert!(
+                fd.dx.len() == n && fd.dtheta.len() == n,
+                "corrections for {n} particles"
+            );
             fd.dx.fill(Vec3::ZERO);
             fd.dtheta.fill(Vec3::ZERO);
             Sides {
