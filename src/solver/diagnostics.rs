@@ -7,9 +7,9 @@
 //! projections are compiled with a recorder that does nothing.
 //!
 //! The corrections cost the kernels nothing: they are read off the
-//! particles' state between sweeps ([`CorrectionTrack`]), in the last
+//! particles' state between sweeps (`CorrectionTrack`), in the last
 //! substep only. The violations are measured on the solver's threads, in
-//! blocks whose [`Tally`]s merge in a fixed order.
+//! blocks whose `Tally`s merge in a fixed order.
 //!
 //! The measurement functions here ([`max_strain`], [`kinetic_energy`],
 //! [`particle_strain`]) are plain functions of a state, used by diagnostics
