@@ -107,13 +107,16 @@ impl Adjust<'_> {
             let mut recs = recorders.map(|_, r| r.fork());
             let mut clock = (timed && crew.index() == 0).then(Clock::new);
             for _ in 0..self.iterations {
-                for family in SWEEP {
+                for (k, family) in SWEEP.into_iter().enumerate() {
                     if self.weights[family] == 0.0 {
                         continue;
                     }
                     self.sweep
                         .project(crew, family, &self.mu, &mut recs[family]);
-                    if let Some(t) = tracking {
+                    // Consecutive sweeps of one family (stretch's passes)
+                    // are credited once, after the last.
+                    let again = SWEEP.get(k + 1) == Some(&family);
+                    if let Some(t) = tracking.filter(|_| !again) {
                         t.credit(crew, family, p);
                     }
                     if let Some(c) = clock.as_mut() {

@@ -77,6 +77,15 @@ impl Family {
         }
     }
 
+    /// Whether the family's projections turn elements (planarity,
+    /// normality, curvature); the others only move them.
+    pub fn turns(self) -> bool {
+        matches!(
+            self,
+            Family::Planarity | Family::Normality | Family::Curvature
+        )
+    }
+
     /// The default weight `λ` (see `docs/method.md`, section 13).
     pub fn default_weight(self) -> f32 {
         match self {

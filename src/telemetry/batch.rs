@@ -24,6 +24,12 @@ pub fn vec3s(values: &[Vec3], descriptor: ComponentDescriptor) -> SerializedComp
     for v in values {
         flat.extend_from_slice(&v.to_array());
     }
+    flat_vec3s(flat, descriptor)
+}
+
+/// The batch of a 3-vector component from its coordinates, three a value.
+fn flat_vec3s(flat: Vec<f32>, descriptor: ComponentDescriptor) -> SerializedComponentBatch {
+    debug_assert!(flat.len().is_multiple_of(3));
     let flat = Float32Array::from(flat);
     let item = Arc::new(Field::new("item", DataType::Float32, false));
     let array = FixedSizeListArray::new(item, 3, Arc::new(flat), None);
@@ -42,6 +48,27 @@ pub fn arrows(origins: &[Vec3], vectors: &[Vec3]) -> rerun::Arrows3D {
     let mut arrows = rerun::Arrows3D::update_fields();
     arrows.vectors = Some(vec3s(vectors, rerun::Arrows3D::descriptor_vectors()));
     arrows.origins = Some(vec3s(origins, rerun::Arrows3D::descriptor_origins()));
+    arrows
+}
+
+/// Arrows `scale · v` from `origins[k]` for the vectors `v = vectors[k]`
+/// that `keep`, in one pass over both (as [`arrows`] of the kept pairs).
+pub fn arrows_where(
+    origins: &[Vec3],
+    vectors: &[Vec3],
+    scale: f32,
+    keep: impl Fn(Vec3) -> bool,
+) -> rerun::Arrows3D {
+    let (mut from, mut along) = (Vec::new(), Vec::new());
+    for (o, v) in origins.iter().zip(vectors) {
+        if keep(*v) {
+            from.extend_from_slice(&o.to_array());
+            along.extend_from_slice(&(*v * scale).to_array());
+        }
+    }
+    let mut arrows = rerun::Arrows3D::update_fields();
+    arrows.vectors = Some(flat_vec3s(along, rerun::Arrows3D::descriptor_vectors()));
+    arrows.origins = Some(flat_vec3s(from, rerun::Arrows3D::descriptor_origins()));
     arrows
 }
 
@@ -81,6 +108,14 @@ mod tests {
         assert_eq!(
             arrows(&o, &v),
             rerun::Arrows3D::from_vectors(v).with_origins(o)
+        );
+        assert_eq!(
+            arrows_where(&o, &v, 2.0, |v| v.z > 0.0),
+            rerun::Arrows3D::from_vectors([2.0 * Vec3::Z]).with_origins([Vec3::X])
+        );
+        assert_eq!(
+            arrows_where(&o, &v, 2.0, |_| false),
+            rerun::Arrows3D::from_vectors(Vec::<Vec3>::new()).with_origins(Vec::<Vec3>::new())
         );
         assert_eq!(
             mesh_update(&o, &v),

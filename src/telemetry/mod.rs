@@ -471,15 +471,15 @@ impl Telemetry {
             let shown = self.settings.corrections[f];
             for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
                 // A family switched off logs empty arrows, clearing its old ones.
-                let (origins, arrows): (Vec<Vec3>, Vec<Vec3>) = vectors
-                    .iter()
-                    .zip(x)
-                    .filter(|(v, _)| shown && v.length() >= threshold && v.length() > 0.0)
-                    .map(|(v, o)| (*o, *v * scale))
-                    .unzip();
+                let arrows = batch::arrows_where(x, vectors, scale, |v| {
+                    shown && {
+                        let len = v.length();
+                        len >= threshold && len > 0.0
+                    }
+                });
                 self.rec.log(
                     paths::correction(f, kind),
-                    &batch::arrows(&origins, &arrows).with_colors([color::family(f)]),
+                    &arrows.with_colors([color::family(f)]),
                 )?;
             }
         }
