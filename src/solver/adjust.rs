@@ -16,8 +16,9 @@
 //! included, which is the wall time the section costs the step.
 //!
 //! In the step's last phase, with corrections asked for, every thread also
-//! credits each family's sweep with what it did to the thread's share of
-//! the particles ([`Tracking`]), and waits for the crew before the next.
+//! credits each family's sweep (stretch's consecutive passes once, after
+//! the last) with what it did to the thread's share of the particles
+//! ([`Tracking`]), and waits for the crew before the next.
 
 use std::time::{Duration, Instant};
 
