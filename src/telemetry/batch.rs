@@ -43,23 +43,16 @@ pub fn points(positions: &[Vec3]) -> rerun::Points3D {
     points
 }
 
-/// Arrows `vectors` from `origins`, nothing else set.
-pub fn arrows(origins: &[Vec3], vectors: &[Vec3]) -> rerun::Arrows3D {
-    let mut arrows = rerun::Arrows3D::update_fields();
-    arrows.vectors = Some(vec3s(vectors, rerun::Arrows3D::descriptor_vectors()));
-    arrows.origins = Some(vec3s(origins, rerun::Arrows3D::descriptor_origins()));
-    arrows
-}
-
 /// Arrows `scale · v` from `origins[k]` for the vectors `v = vectors[k]`
-/// that `keep`, in one pass over both (as [`arrows`] of the kept pairs).
-pub fn arrows_where(
+/// that `keep`, nothing else set, in one pass over both.
+pub fn arrows(
     origins: &[Vec3],
     vectors: &[Vec3],
     scale: f32,
     keep: impl Fn(Vec3) -> bool,
 ) -> rerun::Arrows3D {
-    let (mut from, mut along) = (Vec::new(), Vec::new());
+    let n = 3 * origins.len().min(vectors.len());
+    let (mut from, mut along) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for (o, v) in origins.iter().zip(vectors) {
         if keep(*v) {
             from.extend_from_slice(&o.to_array());
@@ -106,15 +99,15 @@ mod tests {
         let (o, v) = ([Vec3::X, Vec3::Y], [Vec3::Z, -Vec3::Z]);
         assert_eq!(points(&o), rerun::Points3D::new(o));
         assert_eq!(
-            arrows(&o, &v),
+            arrows(&o, &v, 1.0, |_| true),
             rerun::Arrows3D::from_vectors(v).with_origins(o)
         );
         assert_eq!(
-            arrows_where(&o, &v, 2.0, |v| v.z > 0.0),
+            arrows(&o, &v, 2.0, |v| v.z > 0.0),
             rerun::Arrows3D::from_vectors([2.0 * Vec3::Z]).with_origins([Vec3::X])
         );
         assert_eq!(
-            arrows_where(&o, &v, 2.0, |_| false),
+            arrows(&o, &v, 2.0, |_| false),
             rerun::Arrows3D::from_vectors(Vec::<Vec3>::new()).with_origins(Vec::<Vec3>::new())
         );
         assert_eq!(

@@ -405,13 +405,12 @@ impl Telemetry {
         )?;
 
         if self.settings.level == Level::Full {
-            let mut normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
+            let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
             rec.log(paths::MESH, &batch::mesh_update(x, &normals))?;
-            let len = 2.0 * radius;
-            normals.iter_mut().for_each(|n| *n *= len);
             rec.log(
                 paths::NORMALS,
-                &batch::arrows(x, &normals).with_colors([rerun::Color::from_rgb(90, 160, 255)]),
+                &batch::arrows(x, &normals, 2.0 * radius, |_| true)
+                    .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
             )?;
             if let Some(d) = diag {
                 self.log_corrections(x, d)?;
@@ -471,7 +470,7 @@ impl Telemetry {
             let shown = self.settings.corrections[f];
             for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
                 // A family switched off logs empty arrows, clearing its old ones.
-                let arrows = batch::arrows_where(x, vectors, scale, |v| {
+                let arrows = batch::arrows(x, vectors, scale, |v| {
                     shown && {
                         let len = v.length();
                         len >= threshold && len > 0.0
