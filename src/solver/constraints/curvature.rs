@@ -70,11 +70,7 @@ pub(crate) fn project<R: Recorder>(
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
     // Gradients 2n̂/L at the middle and −n̂/L at each end (L = rest / 2).
-    let (wa, wm, wb) = (
-        a.gather(p.inv_mass),
-        m.gather(p.inv_mass),
-        b.gather(p.inv_mass),
-    );
+    let (wa, wm, wb) = (a.inv_mass(p), m.inv_mass(p), b.inv_mass(p));
     let inv_half = F::splat(2.0) / rest;
     let w = (F::splat(4.0) * wm + wa + wb) * inv_half * inv_half;
     let on = bent & w.simd_gt(0.0);
@@ -91,7 +87,7 @@ pub(crate) fn project<R: Recorder>(
     // e = n̂ × chord; the bend angle β from n_a to n_b about e has gradients
     // −e at a and +e at b. Over a run of two edges it counts four times
     // less than the sagitta angle, so its compliance is four times larger.
-    let (ba, bb) = (a.gather(p.inv_inertia), b.gather(p.inv_inertia));
+    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
     let e = across.cross(chord);
     let e_len = e.length();
     let on = bent & !((ba + bb).simd_le(0.0) | e_len.simd_le(1e-9));

@@ -78,10 +78,16 @@ impl Chunk {
         self.idx[k]
     }
 
-    /// `values[i]` for each lane's particle `i`.
+    /// Each lane's inverse mass.
     #[inline(always)]
-    pub(crate) fn gather(&self, values: &[f32]) -> F {
-        F::new(each(|k| values[self.idx[k]]))
+    pub(crate) fn inv_mass(&self, p: &Particles) -> F {
+        F::new(each(|k| p.inv_mass_of(self.idx[k])))
+    }
+
+    /// Each lane's inverse inertia.
+    #[inline(always)]
+    pub(crate) fn inv_inertia(&self, p: &Particles) -> F {
+        F::new(each(|k| p.inv_inertia_of(self.idx[k])))
     }
 
     /// Each lane's position.

@@ -156,6 +156,22 @@ impl<'a> Particles<'a> {
         unsafe { *self.q.get(i) }
     }
 
+    /// Inverse mass of particle `i`.
+    #[inline(always)]
+    pub fn inv_mass_of(&self, i: usize) -> f32 {
+        debug_assert!(i < self.inv_mass.len());
+        // SAFETY: in bounds (see `new`); read-only.
+        unsafe { *self.inv_mass.get_unchecked(i) }
+    }
+
+    /// Inverse inertia of particle `i`.
+    #[inline(always)]
+    pub fn inv_inertia_of(&self, i: usize) -> f32 {
+        debug_assert!(i < self.inv_inertia.len());
+        // SAFETY: in bounds (see `new`); read-only.
+        unsafe { *self.inv_inertia.get_unchecked(i) }
+    }
+
     #[inline(always)]
     fn set_x(&self, i: usize, v: Vec3) {
         // SAFETY: in bounds; exclusive per batch (see `Shared`).
@@ -271,10 +287,19 @@ const SOLO_BATCH: usize = 256;
 /// The blocks a crew of `size` claims a batch of `len` constraints in
 /// ([`Crew::claim`]): about four a thread, so that a thread that meets cheap
 /// constraints (small angles: no steep arctangent, no cut by Eq. 3) takes
-/// more of them, in whole chunks of [`LANES`].
+/// more of them, in whole chunks of [`LANES`]; and at most [`MAX_BLOCK`],
+/// so that the thread that takes a big batch's last block does not keep the
+/// other waiting for long (a 256 × 256 sheet's batches are 32 768 edges).
 fn claim_block(len: usize, size: usize) -> usize {
-    len.div_ceil(4 * size).next_multiple_of(LANES)
+    len.div_ceil(4 * size)
+        .min(MAX_BLOCK)
+        .next_multiple_of(LANES)
 }
+
+/// The largest block [`claim_block`] hands out: 3 % faster steps at
+/// 256 × 256 than blocks of a quarter of a thread's share, the same at
+/// 64 × 64 and 128 × 128 (BENCHMARKS.md, 2026-11-25, second AMD machine).
+const MAX_BLOCK: usize = 512;
 
 /// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
 #[inline(always)]

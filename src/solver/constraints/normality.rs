@@ -36,7 +36,7 @@ pub(crate) fn project<R: Recorder>(
     rec: &mut R,
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (ba, bb) = (a.gather(p.inv_inertia), b.gather(p.inv_inertia));
+    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
     let w = ba + bb;
     let mut on = lanes::live(live) & !w.simd_le(0.0);
     if on.none() {

@@ -64,8 +64,8 @@ impl<'c> End<'c> {
         Self {
             chunk,
             pos: lanes::Held::of(p, chunk),
-            w: chunk.gather(p.inv_mass),
-            beta: chunk.gather(p.inv_inertia),
+            w: chunk.inv_mass(p),
+            beta: chunk.inv_inertia(p),
         }
     }
 }

@@ -36,7 +36,7 @@ pub(crate) fn project(
     alpha_t: f32,
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (wa, wb) = (a.gather(p.inv_mass), b.gather(p.inv_mass));
+    let (wa, wb) = (a.inv_mass(p), b.inv_mass(p));
     let w = wa + wb;
     let s = b.x(p) - a.x(p);
     let len = s.length();
@@ -88,7 +88,7 @@ pub(crate) fn project_tethers(
     if on.none() {
         return;
     }
-    let w = i.gather(p.inv_mass);
+    let w = i.inv_mass(p);
     let rest = lanes::field(tethers, |t| t.rest);
     let alpha_t = F::splat(alpha_t) * lanes::field(tethers, |t| t.span);
     let m = lanes::load(mu);
