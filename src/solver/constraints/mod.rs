@@ -298,7 +298,7 @@ fn claim_block(len: usize, size: usize) -> usize {
 
 /// The largest block [`claim_block`] hands out: 3 % faster steps at
 /// 256 × 256 than blocks of a quarter of a thread's share, the same at
-/// 64 × 64 and 128 × 128 (BENCHMARKS.md, 2026-11-25, second AMD machine).
+/// 64 × 64 and 128 × 128 (BENCHMARKS.md, the Intel machine of 2026-11-25).
 const MAX_BLOCK: usize = 512;
 
 /// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
