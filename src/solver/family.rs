@@ -428,6 +428,7 @@ impl Sweep<'_> {
                     &mu.structural,
                     &structural.batches,
                     rec,
+                    #[inline(always)]
                     |c, m, n, _| stretch::project(p, c, m, n, k.stretch),
                 );
                 // Each particle appears once per tether batch.
@@ -437,6 +438,7 @@ impl Sweep<'_> {
                     &mu.tethers,
                     &tethers.batches,
                     rec,
+                    #[inline(always)]
                     |t, m, n, _| stretch::project_tethers(p, t, m, n, k.stretch),
                 );
             }
@@ -447,6 +449,7 @@ impl Sweep<'_> {
                     &mu.planarity,
                     &structural.batches,
                     rec,
+                    #[inline(always)]
                     |c, m, n, r| planarity::project(p, c, m, n, k.planarity, rot, r),
                 );
             }
@@ -457,6 +460,7 @@ impl Sweep<'_> {
                     &mu.normality,
                     &structural.batches,
                     rec,
+                    #[inline(always)]
                     |c, m, n, r| normality::project(p, c, m, n, k.normality, rot, r),
                 );
                 project_batches(
@@ -465,6 +469,7 @@ impl Sweep<'_> {
                     &mu.shear,
                     &shear.batches,
                     rec,
+                    #[inline(always)]
                     |c, m, n, _| stretch::project(p, c, m, n, k.shear),
                 );
             }
@@ -475,6 +480,7 @@ impl Sweep<'_> {
                     &mu.curvature,
                     &bend.batches,
                     rec,
+                    #[inline(always)]
                     |c, m, n, r| curvature::project(p, c, m, n, k.curvature, rot, r),
                 );
             }
