@@ -517,14 +517,12 @@ fn the_avx2_and_the_baseline_kernels_give_the_same_bits() {
         if let Some(v) = simd {
             cmd.env("WEFT_SIMD", v);
         }
+        // The verdicts do not matter here (the finer sheet strains past
+        // its preset's bound), only the state the run ends in.
         let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+        let text = std::fs::read_to_string(&summary)
+            .unwrap_or_else(|_| panic!("{}", String::from_utf8_lossy(&out.stderr)));
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         json["figures"]["final_state"].as_str().unwrap().to_string()
     };
     // A violent jerk (steep angles, Eq. 3 cutting turns) and a sheet big
