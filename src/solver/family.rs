@@ -428,7 +428,6 @@ impl Sweep<'_> {
                     &mu.structural,
                     &structural.batches,
                     rec,
-                    #[inline(always)]
                     |c, m, n, _| stretch::project(p, c, m, n, k.stretch),
                 );
                 // Each particle appears once per tether batch.
@@ -438,7 +437,6 @@ impl Sweep<'_> {
                     &mu.tethers,
                     &tethers.batches,
                     rec,
-                    #[inline(always)]
                     |t, m, n, _| stretch::project_tethers(p, t, m, n, k.stretch),
                 );
             }
@@ -449,7 +447,6 @@ impl Sweep<'_> {
                     &mu.planarity,
                     &structural.batches,
                     rec,
-                    #[inline(always)]
                     |c, m, n, r| planarity::project(p, c, m, n, k.planarity, rot, r),
                 );
             }
@@ -460,7 +457,6 @@ impl Sweep<'_> {
                     &mu.normality,
                     &structural.batches,
                     rec,
-                    #[inline(always)]
                     |c, m, n, r| normality::project(p, c, m, n, k.normality, rot, r),
                 );
                 project_batches(
@@ -469,7 +465,6 @@ impl Sweep<'_> {
                     &mu.shear,
                     &shear.batches,
                     rec,
-                    #[inline(always)]
                     |c, m, n, _| stretch::project(p, c, m, n, k.shear),
                 );
             }
@@ -480,7 +475,6 @@ impl Sweep<'_> {
                     &mu.curvature,
                     &bend.batches,
                     rec,
-                    #[inline(always)]
                     |c, m, n, r| curvature::project(p, c, m, n, k.curvature, rot, r),
                 );
             }

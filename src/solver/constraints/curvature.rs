@@ -36,7 +36,7 @@ use crate::solver::{forced_rotation::ForcedRotation, topology::Triple};
 /// Projects up to [`LANES`](lanes::LANES) bend triples of one colour side by
 /// side, with compliance `alpha_t` (`α / Δt²`, for a square cell); `mu`
 /// holds each triple's sagitta and bend angle multipliers.
-#[inline(always)]
+#[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
     triples: &[Triple; LANES],

@@ -1,14 +1,13 @@
-//! Sixteen constraints at a time: SIMD lanes over a colour batch.
+//! Eight constraints at a time: SIMD lanes over a colour batch.
 //!
 //! The kernels are chains of dependent operations (a length, a reciprocal,
 //! an angle, a division for `Δμ`, a turn), so one constraint at a time
 //! leaves the core waiting on latencies. The constraints of a colour batch
 //! share no free particle, so [`LANES`] of them can be projected side by
 //! side: their inputs are gathered into lanes ([`V3`], [`Q4`], one
-//! [`Floats`] per component: four SSE registers, or two AVX2 registers
-//! where the processor has AVX2, see [`super::simd`]), every operation runs
-//! on all lanes at once, and the results are scattered back constraint by
-//! constraint.
+//! [`wide::f32x8`] per component: two SSE registers, or one AVX register
+//! where the build enables AVX), every operation runs on all lanes at
+//! once, and the results are scattered back constraint by constraint.
 //!
 //! **Same result as one at a time.** Every lane runs exactly the operations,
 //! in exactly the order, of the scalar formula it stands for (IEEE addition,
@@ -26,20 +25,23 @@
 //! written (see [`live`] and [`project_batches`](super::project_batches)).
 
 use glam::{Quat, Vec3};
+use wide::f32x8;
 
-use super::simd::{self, Floats};
 use super::{ATAN_POLY, NoRecord, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, turn};
 use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
 use crate::solver::forced_rotation::ForcedRotation;
 
 /// Constraints projected side by side.
-pub(crate) const LANES: usize = simd::WIDTH;
+pub(crate) const LANES: usize = 8;
 
 /// One `f32` per lane.
-pub(crate) type F = Floats;
+pub(crate) type F = f32x8;
+
+/// One `i32` per lane.
+type I = wide::i32x8;
 
 /// A lane mask: all bits set where true.
-pub(crate) type Mask = Floats;
+pub(crate) type Mask = f32x8;
 
 /// The particle indices of one role (say, every constraint's first end)
 /// across a chunk of [`LANES`] constraints.
@@ -51,13 +53,13 @@ pub(crate) struct Chunk {
 /// `[f(0), f(1), …]`, one per lane.
 #[inline(always)]
 pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
-    std::array::from_fn(f)
+    [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)]
 }
 
 /// The mask of the first `live` lanes.
 #[inline(always)]
 pub(crate) fn live(live: usize) -> Mask {
-    let lane = F::new(each(|k| k as f32));
+    let lane = F::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
     lane.simd_lt(F::splat(live as f32))
 }
 
@@ -542,7 +544,8 @@ pub(crate) fn exp_neg(r: F) -> F {
     let t = -r * F::splat(std::f32::consts::LOG2_E) + shifter;
     let k = t - shifter;
     let f = (-r - k * F::splat(EXP_LN2_HI)) - k * F::splat(EXP_LN2_LO);
-    let two_k = t.map_bits(|bits| bits.wrapping_sub(EXP_SHIFTER_BITS - 127) << 23);
+    let bits: I = bytemuck::cast(t);
+    let two_k: F = bytemuck::cast((bits - I::splat(EXP_SHIFTER_BITS - 127)) << 23);
     exp_poly(f, F::splat) * two_k
 }
 

@@ -38,7 +38,6 @@ pub(crate) mod lanes;
 pub mod normality;
 pub mod planarity;
 pub mod self_collision;
-pub(crate) mod simd;
 pub mod stretch;
 
 use std::ops::Range;
@@ -302,52 +301,9 @@ fn claim_block(len: usize, size: usize) -> usize {
 /// 64 × 64 and 128 × 128 (BENCHMARKS.md, the Intel machine of 2026-11-25).
 const MAX_BLOCK: usize = 512;
 
-/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]),
-/// in AVX2 registers where the processor has them ([`simd`]): `project`
-/// (a kernel, inlined) is compiled once for each.
-fn project_range<T, M, R>(
-    items: &[T],
-    mu: &Shared<M>,
-    range: Range<usize>,
-    rec: &mut R,
-    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-) where
-    T: Copy,
-    M: Copy,
-    R: Recorder,
-{
-    #[cfg(target_arch = "x86_64")]
-    if simd::has_avx2() {
-        // SAFETY: the processor has AVX2.
-        return unsafe { project_range_avx2(items, mu, range, rec, project) };
-    }
-    project_chunks(items, mu, range, rec, project)
-}
-
-/// [`project_range`] compiled for AVX2.
-///
-/// # Safety
-/// The processor must have AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn project_range_avx2<T, M, R>(
-    items: &[T],
-    mu: &Shared<M>,
-    range: Range<usize>,
-    rec: &mut R,
-    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-) where
-    T: Copy,
-    M: Copy,
-    R: Recorder,
-{
-    project_chunks(items, mu, range, rec, project)
-}
-
-/// [`project_range`]'s loop over the chunks, inlined into the copy for each
-/// instruction set.
+/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
 #[inline(always)]
-fn project_chunks<T, M, R>(
+fn project_range<T, M, R>(
     items: &[T],
     mu: &Shared<M>,
     range: Range<usize>,
@@ -364,32 +320,23 @@ fn project_chunks<T, M, R>(
     // SAFETY: within `mu` (same length as `items`, checked); shares are
     // disjoint, so these multipliers are this thread's until the barrier.
     let mus = unsafe { mu.slice(range.clone()) };
-    let items = &items[range];
-    let mut start = 0;
-    while start < items.len() {
-        let live = (items.len() - start).min(LANES);
-        let (chunk, m) = (&items[start..start + live], &mut mus[start..start + live]);
-        // A short chunk (the end of the range) is padded with copies of its
-        // first constraint, which the kernels compute but never write. One
-        // call of `project`, so that it is inlined once.
-        let mut padded = None;
-        let (lanes, mu_lanes): (&[T; LANES], &mut [M; LANES]) = if live == LANES {
-            (
-                chunk.try_into().expect("exact"),
-                (&mut *m).try_into().expect("exact"),
-            )
-        } else {
-            let pad = padded.insert((
-                lanes::each(|k| chunk.get(k).copied().unwrap_or(chunk[0])),
-                lanes::each(|k| m.get(k).copied().unwrap_or(m[0])),
-            ));
-            (&pad.0, &mut pad.1)
-        };
-        project(lanes, mu_lanes, live, rec);
-        if let Some((_, mu_pad)) = &padded {
-            m.copy_from_slice(&mu_pad[..live]);
-        }
-        start += live;
+    let mut chunks = items[range].chunks_exact(LANES);
+    let mut mu_chunks = mus.chunks_exact_mut(LANES);
+    for (chunk, m) in (&mut chunks).zip(&mut mu_chunks) {
+        let (chunk, m) = (
+            chunk.try_into().expect("exact"),
+            m.try_into().expect("exact"),
+        );
+        project(chunk, m, LANES, rec);
+    }
+    // The tail, padded with copies of its first constraint, which the
+    // kernels compute but never write.
+    let (tail, mu_tail) = (chunks.remainder(), mu_chunks.into_remainder());
+    if let (Some(&first), Some(&first_mu)) = (tail.first(), mu_tail.first()) {
+        let chunk = lanes::each(|k| tail.get(k).copied().unwrap_or(first));
+        let mut m = lanes::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
+        project(&chunk, &mut m, tail.len(), rec);
+        mu_tail.copy_from_slice(&m[..tail.len()]);
     }
 }
 

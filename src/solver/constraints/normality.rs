@@ -25,7 +25,7 @@ use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 /// Projects the normals of up to [`LANES`](lanes::LANES) edges of one
 /// colour toward each other, side by side, with compliance `alpha_t`
 /// (`α / Δt²`, for a square cell).
-#[inline(always)]
+#[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
     pairs: &[Pair; LANES],

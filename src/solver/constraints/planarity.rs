@@ -25,7 +25,7 @@ use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 /// Projects up to [`LANES`](lanes::LANES) edges of one colour side by side,
 /// each from both ends, with compliance `alpha_t` (`α / Δt²`, for a square
 /// cell); `mu` holds each edge's two sides' multipliers.
-#[inline(always)]
+#[inline]
 pub(crate) fn project<R: Recorder>(
     p: &Particles,
     pairs: &[Pair; LANES],

@@ -27,7 +27,7 @@ use crate::solver::topology::Pair;
 /// Projects up to [`LANES`](lanes::LANES) distance constraints of one colour
 /// side by side, with compliance `alpha_t` (`α / Δt²` for a square cell;
 /// divided by each pair's aspect).
-#[inline(always)]
+#[inline]
 pub(crate) fn project(
     p: &Particles,
     pairs: &[Pair; LANES],
@@ -70,7 +70,7 @@ pub struct Tether {
 
 /// Projects up to [`LANES`](lanes::LANES) tethers of one batch side by
 /// side: pulls each particle back if it is too far.
-#[inline(always)]
+#[inline]
 pub(crate) fn project_tethers(
     p: &Particles,
     tethers: &[Tether; LANES],
