@@ -499,3 +499,40 @@ fn each_recording_in_a_file_is_read_on_its_own() {
         "{frames:?}"
     );
 }
+
+#[test]
+fn the_avx2_and_the_baseline_kernels_give_the_same_bits() {
+    // Where the processor has no AVX2 both runs take the baseline kernels
+    // and this checks nothing more than determinism.
+    let dir = tempfile::tempdir().unwrap();
+    let final_state = |preset: &str, extra: &[&str], simd: Option<&str>| {
+        let summary = dir
+            .path()
+            .join(format!("{preset}-{}.json", simd.unwrap_or("any")));
+        let mut cmd = weft();
+        cmd.args(["record", preset, "--frames", "40", "--level", "summary"])
+            .args(extra)
+            .arg("--summary")
+            .arg(&summary);
+        if let Some(v) = simd {
+            cmd.env("WEFT_SIMD", v);
+        }
+        // The verdicts do not matter here (a 64 × 64 sheet strains more
+        // than the preset's bound): only the final state does.
+        let out = cmd.output().unwrap();
+        let text = std::fs::read_to_string(&summary)
+            .unwrap_or_else(|_| panic!("{}", String::from_utf8_lossy(&out.stderr)));
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        json["figures"]["final_state"].as_str().unwrap().to_string()
+    };
+    // A violent jerk (steep angles, Eq. 3 cutting turns) and a sheet big
+    // enough for both threads.
+    let big = ["--set", "cloth.weft=64", "--set", "cloth.warp=64"];
+    for (preset, extra) in [("stress_jerk", &[][..]), ("hanging_sheet", &big[..])] {
+        assert_eq!(
+            final_state(preset, extra, None),
+            final_state(preset, extra, Some("baseline")),
+            "{preset}"
+        );
+    }
+}

@@ -23,7 +23,7 @@ use glam::Quat;
 
 use super::{
     cloth::ClothState,
-    constraints::lanes::{F, Mask, V3},
+    constraints::lanes::{LANES, Lane, V3},
     constraints::{Particles, Recorder, Shared, atan2},
     family::{Family, PerFamily},
     team::Crew,
@@ -170,13 +170,13 @@ impl Diagnostics {
 #[derive(Clone, Copy, Default)]
 pub(crate) struct LargestTurn {
     squared: f32,
-    lanes: F,
+    lanes: [f32; LANES],
 }
 
 impl LargestTurn {
     /// The largest rotation recorded, in radians.
     pub(crate) fn radians(&self) -> f32 {
-        let lanes = self.lanes.to_array().into_iter().fold(0.0, f32::max);
+        let lanes = self.lanes.into_iter().fold(0.0, f32::max);
         self.squared.max(lanes).sqrt()
     }
 }
@@ -187,17 +187,19 @@ impl Recorder for LargestTurn {
     fn turned(&mut self, omega: Vec3) {
         self.squared = self.squared.max(omega.length_squared());
     }
-    #[inline]
-    fn turned_lanes(&mut self, omega: V3, mask: Mask) {
+    // Always inlined, so that in the AVX2 copy of a kernel its lanes are
+    // AVX instructions, not calls (`constraints/avx.rs`).
+    #[inline(always)]
+    fn turned_lanes<F: Lane>(&mut self, omega: V3<F>, mask: F) {
         let squared = mask.select(omega.length_squared(), F::ZERO);
-        self.lanes = self.lanes.max(squared);
+        self.lanes = F::new(self.lanes).max(squared).to_array();
     }
     fn fork(&self) -> Self {
         Self::default()
     }
     fn join(&mut self, other: Self) {
         self.squared = self.squared.max(other.squared);
-        self.lanes = self.lanes.max(other.lanes);
+        self.lanes = std::array::from_fn(|k| self.lanes[k].max(other.lanes[k]));
     }
 }
 

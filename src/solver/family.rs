@@ -24,7 +24,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use super::cloth::{ClothSpec, ClothState};
 use super::constraints::self_collision::{self, SelfContact};
 use super::constraints::{
-    Particles, Recorder, Shared, curvature, normality, planarity, project_batches, stretch,
+    Particles, Recorder, Shared, curvature, kernel, normality, planarity, project_batches, stretch,
 };
 use super::diagnostics::{Tally, Violation};
 use super::forced_rotation::ForcedRotation;
@@ -428,7 +428,7 @@ impl Sweep<'_> {
                     &mu.structural,
                     &structural.batches,
                     rec,
-                    |c, m, n, _| stretch::project(p, c, m, n, k.stretch),
+                    kernel!(|c, m, n, _| stretch::project::<F>(p, c, m, n, k.stretch)),
                 );
                 // Each particle appears once per tether batch.
                 project_batches(
@@ -437,7 +437,7 @@ impl Sweep<'_> {
                     &mu.tethers,
                     &tethers.batches,
                     rec,
-                    |t, m, n, _| stretch::project_tethers(p, t, m, n, k.stretch),
+                    kernel!(|t, m, n, _| stretch::project_tethers::<F>(p, t, m, n, k.stretch)),
                 );
             }
             Family::Planarity => {
@@ -447,7 +447,15 @@ impl Sweep<'_> {
                     &mu.planarity,
                     &structural.batches,
                     rec,
-                    |c, m, n, r| planarity::project(p, c, m, n, k.planarity, rot, r),
+                    kernel!(|c, m, n, r| planarity::project::<F, _>(
+                        p,
+                        c,
+                        m,
+                        n,
+                        k.planarity,
+                        rot,
+                        r
+                    )),
                 );
             }
             Family::Normality => {
@@ -457,7 +465,15 @@ impl Sweep<'_> {
                     &mu.normality,
                     &structural.batches,
                     rec,
-                    |c, m, n, r| normality::project(p, c, m, n, k.normality, rot, r),
+                    kernel!(|c, m, n, r| normality::project::<F, _>(
+                        p,
+                        c,
+                        m,
+                        n,
+                        k.normality,
+                        rot,
+                        r
+                    )),
                 );
                 project_batches(
                     crew,
@@ -465,7 +481,7 @@ impl Sweep<'_> {
                     &mu.shear,
                     &shear.batches,
                     rec,
-                    |c, m, n, _| stretch::project(p, c, m, n, k.shear),
+                    kernel!(|c, m, n, _| stretch::project::<F>(p, c, m, n, k.shear)),
                 );
             }
             Family::Curvature => {
@@ -475,7 +491,15 @@ impl Sweep<'_> {
                     &mu.curvature,
                     &bend.batches,
                     rec,
-                    |c, m, n, r| curvature::project(p, c, m, n, k.curvature, rot, r),
+                    kernel!(|c, m, n, r| curvature::project::<F, _>(
+                        p,
+                        c,
+                        m,
+                        n,
+                        k.curvature,
+                        rot,
+                        r
+                    )),
                 );
             }
             Family::SelfCollision => {
@@ -485,11 +509,11 @@ impl Sweep<'_> {
                     &mu.self_contact,
                     &contacts.batches,
                     rec,
-                    |cs, ms, n, _| {
+                    kernel!(|cs, ms, n, _| {
                         for (&c, m) in cs.iter().zip(ms).take(n) {
                             self_collision::project(p, c, m, thickness, k.self_contact);
                         }
-                    },
+                    }),
                 );
             }
         }

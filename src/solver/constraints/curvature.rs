@@ -29,15 +29,15 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, F, LANES, V3};
+use super::lanes::{self, Chunk, LANES, Lane, V3};
 use super::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Triple};
 
 /// Projects up to [`LANES`](lanes::LANES) bend triples of one colour side by
 /// side, with compliance `alpha_t` (`α / Δt²`, for a square cell); `mu`
 /// holds each triple's sagitta and bend angle multipliers.
-#[inline]
-pub(crate) fn project<R: Recorder>(
+#[inline(always)]
+pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
     triples: &[Triple; LANES],
     mu: &mut [[f32; 2]; LANES],
@@ -49,16 +49,16 @@ pub(crate) fn project<R: Recorder>(
     let a = Chunk::of(triples, |t| t.a);
     let m = Chunk::of(triples, |t| t.mid);
     let b = Chunk::of(triples, |t| t.b);
-    let (qa, qb) = (a.q(p), b.q(p));
+    let (qa, qb) = (a.q::<F>(p), b.q::<F>(p));
     let (na, nb) = (qa.normal(), qb.normal());
-    let (xa, xm, xb) = (a.x(p), m.x(p), b.x(p));
+    let (xa, xm, xb) = (a.x::<F>(p), m.x::<F>(p), b.x::<F>(p));
     let rest = lanes::field(triples, |t| t.rest);
     // `sagitta`, in lanes; a straight run has nothing to bend back.
     let chord = xb - xa;
     let offset = xm - (xa + xb) * F::splat(0.5);
     let across = offset - chord * (offset.dot(chord) / chord.length_squared().max(F::splat(1e-18)));
     let len = across.length();
-    let bent = lanes::live(live) & !(len.is_nan() | len.simd_le(1e-9));
+    let bent = lanes::live::<F>(live) & !(len.is_nan() | len.simd_le(1e-9));
     if bent.none() {
         return;
     }
@@ -70,7 +70,7 @@ pub(crate) fn project<R: Recorder>(
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
     // Gradients 2n̂/L at the middle and −n̂/L at each end (L = rest / 2).
-    let (wa, wm, wb) = (a.inv_mass(p), m.inv_mass(p), b.inv_mass(p));
+    let (wa, wm, wb) = (a.inv_mass::<F>(p), m.inv_mass::<F>(p), b.inv_mass::<F>(p));
     let inv_half = F::splat(2.0) / rest;
     let w = (F::splat(4.0) * wm + wa + wb) * inv_half * inv_half;
     let on = bent & w.simd_gt(0.0);
@@ -87,12 +87,12 @@ pub(crate) fn project<R: Recorder>(
     // e = n̂ × chord; the bend angle β from n_a to n_b about e has gradients
     // −e at a and +e at b. Over a run of two edges it counts four times
     // less than the sagitta angle, so its compliance is four times larger.
-    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
+    let (ba, bb) = (a.inv_inertia::<F>(p), b.inv_inertia::<F>(p));
     let e = across.cross(chord);
     let e_len = e.length();
     let on = bent & !((ba + bb).simd_le(0.0) | e_len.simd_le(1e-9));
     if on.any() {
-        let e: V3 = e * (F::ONE / e_len);
+        let e: V3<F> = e * (F::ONE / e_len);
         let bend = lanes::atan2(na.cross(nb).dot(e), na.dot(nb));
         let d = lanes::delta_mu(bend, ba + bb, F::splat(4.0) * alpha_t, mus[1]);
         let d = lanes::forced(rot, bend.abs(), d, ba.max(bb), on);

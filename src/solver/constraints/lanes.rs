@@ -5,9 +5,16 @@
 //! leaves the core waiting on latencies. The constraints of a colour batch
 //! share no free particle, so [`LANES`] of them can be projected side by
 //! side: their inputs are gathered into lanes ([`V3`], [`Q4`], one
-//! [`wide::f32x8`] per component: two SSE registers, or one AVX register
-//! where the build enables AVX), every operation runs on all lanes at
+//! [`Lane`] value per component), every operation runs on all lanes at
 //! once, and the results are scattered back constraint by constraint.
+//!
+//! **Two lane types, one kernel.** The kernels are generic over the lane
+//! type and compiled twice: with [`Sse`] (`wide::f32x8`, two SSE registers
+//! a value) for any processor, and with [`Avx`] (one AVX register a value,
+//! `constraints/avx.rs`) in a copy of the chunk loop compiled for AVX2,
+//! which [`project_range`](super::project_range) takes where the processor
+//! has it: 3–4 % faster steps on the benchmark sheets, the same bits
+//! (BENCHMARKS.md, 2026-11-26).
 //!
 //! **Same result as one at a time.** Every lane runs exactly the operations,
 //! in exactly the order, of the scalar formula it stands for (IEEE addition,
@@ -24,8 +31,9 @@
 //! with copies of its first constraint, which are computed and never
 //! written (see [`live`] and [`project_batches`](super::project_batches)).
 
+use std::ops::{Add, BitAnd, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
+
 use glam::{Quat, Vec3};
-use wide::f32x8;
 
 use super::{ATAN_POLY, NoRecord, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, turn};
 use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
@@ -34,14 +42,187 @@ use crate::solver::forced_rotation::ForcedRotation;
 /// Constraints projected side by side.
 pub(crate) const LANES: usize = 8;
 
-/// One `f32` per lane.
-pub(crate) type F = f32x8;
+/// One `f32` per lane, [`LANES`] of them: what the kernels compute in. A
+/// mask is a lane value too, all bits set where true. Two types implement
+/// it, with the same results bit for bit: [`Sse`] for any x86-64 (and other
+/// processors), and [`Avx`] in the copy of the kernels compiled for AVX2
+/// ([`project_range`](super::project_range)).
+pub(crate) trait Lane:
+    Copy
+    + From<f32>
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + BitOrAssign
+    + Not<Output = Self>
+{
+    /// 0 in every lane.
+    const ZERO: Self;
+    /// 1 in every lane.
+    const ONE: Self;
+    /// π in every lane.
+    const PI: Self;
+    /// π/2 in every lane.
+    const FRAC_PI_2: Self;
+    /// The lanes `v`.
+    fn new(v: [f32; LANES]) -> Self;
+    /// `v` in every lane.
+    fn splat(v: f32) -> Self;
+    /// The lanes as an array.
+    fn to_array(self) -> [f32; LANES];
+    /// The lanes, borrowed.
+    fn as_array(&self) -> &[f32; LANES];
+    /// The lanes, borrowed to change.
+    fn as_mut_array(&mut self) -> &mut [f32; LANES];
+    /// The mask of `self < o` (false where either is NaN); and so on.
+    fn simd_lt(self, o: impl Into<Self>) -> Self;
+    /// See [`Lane::simd_lt`].
+    fn simd_le(self, o: impl Into<Self>) -> Self;
+    /// See [`Lane::simd_lt`].
+    fn simd_gt(self, o: impl Into<Self>) -> Self;
+    /// See [`Lane::simd_lt`].
+    fn simd_ge(self, o: impl Into<Self>) -> Self;
+    /// See [`Lane::simd_lt`].
+    fn simd_eq(self, o: impl Into<Self>) -> Self;
+    /// The mask of the NaN lanes.
+    fn is_nan(self) -> Self;
+    /// `t` in the lanes of the mask `self`, `f` elsewhere.
+    fn select(self, t: Self, f: Self) -> Self;
+    /// Bit `k` set where lane `k` of the mask `self` is.
+    fn to_bitmask(self) -> u32;
+    /// Whether any lane of the mask is set.
+    fn any(self) -> bool;
+    /// Whether every lane of the mask is set.
+    fn all(self) -> bool;
+    /// Whether no lane of the mask is set.
+    fn none(self) -> bool;
+    /// `|v|`: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// `self` with the sign bit of `sign`.
+    fn copysign(self, sign: Self) -> Self;
+    /// The larger, as SSE's `maxps` with a NaN in `o` ignored.
+    fn max(self, o: Self) -> Self;
+    /// The smaller, as SSE's `minps` with a NaN in `o` ignored.
+    fn min(self, o: Self) -> Self;
+    /// The correctly rounded square root.
+    fn sqrt(self) -> Self;
+    /// `2^k` for the `k` that [`exp_neg`] left in the low bits of `self`
+    /// (`self`'s bits as an integer, less `bias`, shifted into the exponent).
+    fn pow2(self, bias: i32) -> Self;
+}
 
-/// One `i32` per lane.
-type I = wide::i32x8;
+/// Eight lanes of `wide`: two SSE registers (one AVX register in a build
+/// that enables AVX for every crate).
+pub(crate) type Sse = wide::f32x8;
 
-/// A lane mask: all bits set where true.
-pub(crate) type Mask = f32x8;
+/// Eight lanes in one AVX register, for the copy of the kernels compiled
+/// for AVX2.
+#[cfg(target_arch = "x86_64")]
+pub(crate) type Avx = super::avx::F8;
+
+/// Elsewhere the AVX2 copy is never chosen; its kernels use [`Sse`].
+#[cfg(not(target_arch = "x86_64"))]
+pub(crate) type Avx = Sse;
+
+impl Lane for Sse {
+    const ZERO: Self = wide::f32x8::ZERO;
+    const ONE: Self = wide::f32x8::ONE;
+    const PI: Self = wide::f32x8::PI;
+    const FRAC_PI_2: Self = wide::f32x8::FRAC_PI_2;
+    #[inline(always)]
+    fn new(v: [f32; LANES]) -> Self {
+        wide::f32x8::new(v)
+    }
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        wide::f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; LANES] {
+        wide::f32x8::to_array(self)
+    }
+    #[inline(always)]
+    fn as_array(&self) -> &[f32; LANES] {
+        wide::f32x8::as_array(self)
+    }
+    #[inline(always)]
+    fn as_mut_array(&mut self) -> &mut [f32; LANES] {
+        wide::f32x8::as_mut_array(self)
+    }
+    #[inline(always)]
+    fn simd_lt(self, o: impl Into<Self>) -> Self {
+        wide::f32x8::simd_lt(self, o.into())
+    }
+    #[inline(always)]
+    fn simd_le(self, o: impl Into<Self>) -> Self {
+        wide::f32x8::simd_le(self, o.into())
+    }
+    #[inline(always)]
+    fn simd_gt(self, o: impl Into<Self>) -> Self {
+        wide::f32x8::simd_gt(self, o.into())
+    }
+    #[inline(always)]
+    fn simd_ge(self, o: impl Into<Self>) -> Self {
+        wide::f32x8::simd_ge(self, o.into())
+    }
+    #[inline(always)]
+    fn simd_eq(self, o: impl Into<Self>) -> Self {
+        wide::f32x8::simd_eq(self, o.into())
+    }
+    #[inline(always)]
+    fn is_nan(self) -> Self {
+        wide::f32x8::is_nan(self)
+    }
+    #[inline(always)]
+    fn select(self, t: Self, f: Self) -> Self {
+        wide::f32x8::select(self, t, f)
+    }
+    #[inline(always)]
+    fn to_bitmask(self) -> u32 {
+        wide::f32x8::to_bitmask(self)
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        wide::f32x8::any(self)
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        wide::f32x8::all(self)
+    }
+    #[inline(always)]
+    fn none(self) -> bool {
+        wide::f32x8::none(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        wide::f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        wide::f32x8::copysign(self, sign)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        wide::f32x8::max(self, o)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        wide::f32x8::min(self, o)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        wide::f32x8::sqrt(self)
+    }
+    #[inline(always)]
+    fn pow2(self, bias: i32) -> Self {
+        let bits: wide::i32x8 = bytemuck::cast(self);
+        bytemuck::cast((bits - wide::i32x8::splat(bias)) << 23)
+    }
+}
 
 /// The particle indices of one role (say, every constraint's first end)
 /// across a chunk of [`LANES`] constraints.
@@ -58,7 +239,7 @@ pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
 
 /// The mask of the first `live` lanes.
 #[inline(always)]
-pub(crate) fn live(live: usize) -> Mask {
+pub(crate) fn live<F: Lane>(live: usize) -> F {
     let lane = F::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
     lane.simd_lt(F::splat(live as f32))
 }
@@ -80,25 +261,25 @@ impl Chunk {
 
     /// Each lane's inverse mass.
     #[inline(always)]
-    pub(crate) fn inv_mass(&self, p: &Particles) -> F {
+    pub(crate) fn inv_mass<F: Lane>(&self, p: &Particles) -> F {
         F::new(each(|k| p.inv_mass_of(self.idx[k])))
     }
 
     /// Each lane's inverse inertia.
     #[inline(always)]
-    pub(crate) fn inv_inertia(&self, p: &Particles) -> F {
+    pub(crate) fn inv_inertia<F: Lane>(&self, p: &Particles) -> F {
         F::new(each(|k| p.inv_inertia_of(self.idx[k])))
     }
 
     /// Each lane's position.
     #[inline(always)]
-    pub(crate) fn x(&self, p: &Particles) -> V3 {
+    pub(crate) fn x<F: Lane>(&self, p: &Particles) -> V3<F> {
         V3::from_lanes(each(|k| p.x(self.idx[k])))
     }
 
     /// Each lane's orientation.
     #[inline(always)]
-    pub(crate) fn q(&self, p: &Particles) -> Q4 {
+    pub(crate) fn q<F: Lane>(&self, p: &Particles) -> Q4<F> {
         let q = each(|k| p.q(self.idx[k]));
         Q4 {
             x: F::new(each(|k| q[k].x)),
@@ -110,7 +291,7 @@ impl Chunk {
 
     /// Moves each lane's particle by its `dx`, in the lanes of `mask`.
     #[inline(always)]
-    pub(crate) fn shift(&self, p: &Particles, dx: V3, mask: Mask) {
+    pub(crate) fn shift<F: Lane>(&self, p: &Particles, dx: V3<F>, mask: F) {
         let bits = mask.to_bitmask();
         for k in 0..LANES {
             if bits & (1 << k) != 0 {
@@ -123,12 +304,12 @@ impl Chunk {
     /// rotation vector `omega`, in the lanes of `mask` (as
     /// [`super::turn`]).
     #[inline(always)]
-    pub(crate) fn turn<R: Recorder>(
+    pub(crate) fn turn<R: Recorder, F: Lane>(
         &self,
         p: &Particles,
-        q: Q4,
-        omega: V3,
-        mask: Mask,
+        q: Q4<F>,
+        omega: V3<F>,
+        mask: F,
         rec: &mut R,
     ) {
         let bits = mask.to_bitmask();
@@ -158,13 +339,13 @@ impl Chunk {
 /// once, written back once at the end ([`Held::put`]). Each move is the
 /// same addition [`Chunk::shift`] makes in memory, so the result is too.
 #[derive(Clone, Copy)]
-pub(crate) struct Held {
-    pub x: V3,
+pub(crate) struct Held<F: Lane> {
+    pub x: V3<F>,
     /// The lanes moved so far.
-    moved: Mask,
+    moved: F,
 }
 
-impl Held {
+impl<F: Lane> Held<F> {
     /// The chunk's positions.
     #[inline(always)]
     pub(crate) fn of(p: &Particles, chunk: &Chunk) -> Self {
@@ -176,7 +357,7 @@ impl Held {
 
     /// Moves each lane's position by its `dx`, in the lanes of `mask`.
     #[inline(always)]
-    pub(crate) fn shift(&mut self, dx: V3, mask: Mask) {
+    pub(crate) fn shift(&mut self, dx: V3<F>, mask: F) {
         self.x = V3::select(mask, self.x + dx, self.x);
         self.moved |= mask;
     }
@@ -193,13 +374,13 @@ impl Held {
 
 /// A vector per lane.
 #[derive(Clone, Copy)]
-pub(crate) struct V3 {
+pub(crate) struct V3<F: Lane> {
     pub x: F,
     pub y: F,
     pub z: F,
 }
 
-impl V3 {
+impl<F: Lane> V3<F> {
     #[inline(always)]
     fn from_lanes(v: [Vec3; LANES]) -> Self {
         Self {
@@ -245,7 +426,7 @@ impl V3 {
 
     /// `a` in the lanes of `mask`, `b` elsewhere.
     #[inline(always)]
-    pub(crate) fn select(mask: Mask, a: Self, b: Self) -> Self {
+    pub(crate) fn select(mask: F, a: Self, b: Self) -> Self {
         Self {
             x: mask.select(a.x, b.x),
             y: mask.select(a.y, b.y),
@@ -256,7 +437,7 @@ impl V3 {
     /// Set in the lanes whose point lies in the box `[lo, hi]`, bounds
     /// included (as glam's `x.cmpge(lo).all() && x.cmple(hi).all()`).
     #[inline(always)]
-    pub(crate) fn in_box(self, lo: Self, hi: Self) -> Mask {
+    pub(crate) fn in_box(self, lo: Self, hi: Self) -> F {
         self.x.simd_ge(lo.x)
             & self.y.simd_ge(lo.y)
             & self.z.simd_ge(lo.z)
@@ -294,7 +475,7 @@ impl V3 {
     }
 }
 
-impl std::ops::Add for V3 {
+impl<F: Lane> std::ops::Add for V3<F> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -306,7 +487,7 @@ impl std::ops::Add for V3 {
     }
 }
 
-impl std::ops::Sub for V3 {
+impl<F: Lane> std::ops::Sub for V3<F> {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
@@ -318,7 +499,7 @@ impl std::ops::Sub for V3 {
     }
 }
 
-impl std::ops::Mul<F> for V3 {
+impl<F: Lane> std::ops::Mul<F> for V3<F> {
     type Output = Self;
     #[inline(always)]
     fn mul(self, s: F) -> Self {
@@ -332,14 +513,14 @@ impl std::ops::Mul<F> for V3 {
 
 /// A quaternion per lane.
 #[derive(Clone, Copy)]
-pub(crate) struct Q4 {
+pub(crate) struct Q4<F: Lane> {
     pub x: F,
     pub y: F,
     pub z: F,
     pub w: F,
 }
 
-impl Q4 {
+impl<F: Lane> Q4<F> {
     #[inline(always)]
     fn lane(&self, k: usize) -> Quat {
         Quat::from_xyzw(
@@ -352,7 +533,7 @@ impl Q4 {
 
     /// Each lane's normal (as [`normal_of`](crate::solver::cloth::normal_of)).
     #[inline(always)]
-    pub(crate) fn normal(&self) -> V3 {
+    pub(crate) fn normal(&self) -> V3<F> {
         let two = F::splat(2.0);
         V3 {
             x: two * (self.x * self.z + self.w * self.y),
@@ -380,7 +561,7 @@ impl Q4 {
 /// count ([`FOURTH_ORDER`]): elsewhere `θ⁴` would be subnormal for the tiny
 /// turns of a resting cloth.
 #[inline(always)]
-fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
+fn turn_by<F: Lane>(q: Q4<F>, r: V3<F>) -> (Q4<F>, F) {
     // As the scalar `angle_squared`: components under NEGLIGIBLE_TURN left out.
     let kept = |v: F| v.abs().simd_lt(NEGLIGIBLE_TURN).select(F::ZERO, v);
     let t2 = V3 {
@@ -417,7 +598,7 @@ fn turn_by(q: Q4, r: V3) -> (Q4, Mask) {
 
 /// [`atan`](super::atan) in every lane.
 #[inline(always)]
-pub(crate) fn atan(t: F) -> F {
+pub(crate) fn atan<F: Lane>(t: F) -> F {
     let a = t.abs();
     // As the scalar `square_above_subnormal`.
     let floor = a.max(F::splat(SMALL_ANGLE_FLOOR));
@@ -450,7 +631,7 @@ pub(crate) fn atan(t: F) -> F {
 /// [`atan2`](super::atan2) in every lane: in lanes for `x ≠ 0`, alone for
 /// the rest (`x = 0` or NaN).
 #[inline(always)]
-pub(crate) fn atan2(y: F, x: F) -> F {
+pub(crate) fn atan2<F: Lane>(y: F, x: F) -> F {
     let r = y / x;
     let right = x.simd_gt(0.0);
     let angle = atan(right.select(r, r.abs()));
@@ -470,14 +651,14 @@ pub(crate) fn atan2(y: F, x: F) -> F {
 
 /// [`delta_mu`](super::delta_mu) in every lane.
 #[inline(always)]
-pub(crate) fn delta_mu(c: F, w: F, alpha_t: F, mu: F) -> F {
+pub(crate) fn delta_mu<F: Lane>(c: F, w: F, alpha_t: F, mu: F) -> F {
     (-c - alpha_t * mu) / (w + alpha_t)
 }
 
 /// [`ForcedRotation::scale`] in every lane, case by case as the scalar
 /// code (`limit`, then the fraction).
 #[inline(always)]
-pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
+pub(crate) fn scale<F: Lane>(rot: &ForcedRotation, violation: F, full: F) -> F {
     let (phi, h) = (F::splat(rot.phi), F::splat(rot.h));
     // As the scalar test, the product left out under `h` (a zero factor,
     // so that it is never subnormal).
@@ -522,7 +703,7 @@ pub(crate) fn scale(rot: &ForcedRotation, violation: F, full: F) -> F {
 /// only in those bits (`docs/method.md`, "No subnormal numbers where Eq. 3
 /// closes").
 #[inline(always)]
-pub(crate) fn forced(rot: &ForcedRotation, violation: F, d: F, beta: F, on: Mask) -> F {
+pub(crate) fn forced<F: Lane>(rot: &ForcedRotation, violation: F, d: F, beta: F, on: F) -> F {
     let cut = F::splat(NEGLIGIBLE_CHANGE);
     let fraction = scale(rot, violation, on.select(beta * d.abs(), F::ZERO));
     let d = d * fraction.simd_lt(cut).select(F::ZERO, fraction);
@@ -536,7 +717,7 @@ pub(crate) const NEGLIGIBLE_CHANGE: f32 = 1e-20;
 /// [`exp_neg`](crate::solver::forced_rotation::exp_neg) in every lane,
 /// operation for operation.
 #[inline(always)]
-pub(crate) fn exp_neg(r: F) -> F {
+pub(crate) fn exp_neg<F: Lane>(r: F) -> F {
     use crate::solver::forced_rotation::{
         EXP_LN2_HI, EXP_LN2_LO, EXP_SHIFTER, EXP_SHIFTER_BITS, exp_poly,
     };
@@ -544,67 +725,122 @@ pub(crate) fn exp_neg(r: F) -> F {
     let t = -r * F::splat(std::f32::consts::LOG2_E) + shifter;
     let k = t - shifter;
     let f = (-r - k * F::splat(EXP_LN2_HI)) - k * F::splat(EXP_LN2_LO);
-    let bits: I = bytemuck::cast(t);
-    let two_k: F = bytemuck::cast((bits - I::splat(EXP_SHIFTER_BITS - 127)) << 23);
+    let two_k = t.pow2(EXP_SHIFTER_BITS - 127);
     exp_poly(f, F::splat) * two_k
 }
 
 /// `f(item)` of each of a chunk's constraints, in its lane.
 #[inline(always)]
-pub(crate) fn field<T: Copy>(items: &[T; LANES], f: impl Fn(T) -> f32) -> F {
+pub(crate) fn field<F: Lane, T: Copy>(items: &[T; LANES], f: impl Fn(T) -> f32) -> F {
     F::new(each(|k| f(items[k])))
 }
 
 /// `f(m)` of each of a chunk's multipliers, in its lane.
 #[inline(always)]
-pub(crate) fn load_with<M>(mu: &[M; LANES], f: impl Fn(&M) -> f32) -> F {
+pub(crate) fn load_with<F: Lane, M>(mu: &[M; LANES], f: impl Fn(&M) -> f32) -> F {
     F::new(each(|k| f(&mu[k])))
 }
 
 /// A chunk's multipliers, one per lane.
 #[inline(always)]
-pub(crate) fn load(mu: &[f32; LANES]) -> F {
+pub(crate) fn load<F: Lane>(mu: &[f32; LANES]) -> F {
     F::new(*mu)
 }
 
 /// Writes the lanes of `v` back to a chunk's multipliers.
 #[inline(always)]
-pub(crate) fn store(v: F, mu: &mut [f32; LANES]) {
+pub(crate) fn store<F: Lane>(v: F, mu: &mut [f32; LANES]) {
     *mu = v.to_array();
 }
 
 /// A chunk's pairs of multipliers (a constraint with two parts), as two
 /// lane values.
 #[inline(always)]
-pub(crate) fn load_pairs(mu: &[[f32; 2]; LANES]) -> [F; 2] {
+pub(crate) fn load_pairs<F: Lane>(mu: &[[f32; 2]; LANES]) -> [F; 2] {
     [load_with(mu, |m| m[0]), load_with(mu, |m| m[1])]
 }
 
 /// Writes two lane values back to a chunk's pairs of multipliers.
 #[inline(always)]
-pub(crate) fn store_pairs(v: [F; 2], mu: &mut [[f32; 2]; LANES]) {
+pub(crate) fn store_pairs<F: Lane>(v: [F; 2], mu: &mut [[f32; 2]; LANES]) {
     let (first, second) = (v[0].to_array(), v[1].to_array());
     *mu = each(|k| [first[k], second[k]]);
 }
 
 /// `f32::clamp(v, -1, 1)` in every lane (NaN stays NaN).
 #[inline(always)]
-pub(crate) fn clamp_unit(v: F) -> F {
+pub(crate) fn clamp_unit<F: Lane>(v: F) -> F {
     let v = v.simd_lt(-1.0).select(F::splat(-1.0), v);
     v.simd_gt(1.0).select(F::ONE, v)
 }
 
 #[cfg(test)]
 mod tests {
+    use super::Sse as F;
     use super::*;
 
     #[test]
     fn live_sets_every_bit_of_the_first_lanes_only() {
         for n in 0..=LANES {
-            let bits = live(n).to_array().map(f32::to_bits);
+            let bits = live::<F>(n).to_array().map(f32::to_bits);
             for (k, b) in bits.into_iter().enumerate() {
                 assert_eq!(b, if k < n { u32::MAX } else { 0 }, "{n} live, lane {k}");
             }
+        }
+    }
+
+    /// The lane functions' results' bits in lane type `L`.
+    #[cfg(target_arch = "x86_64")]
+    fn lane_bits<L: Lane>(t: [f32; LANES], y: [f32; LANES], x: [f32; LANES]) -> Vec<u32> {
+        let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
+        let (t, y, x) = (L::new(t), L::new(y), L::new(x));
+        let q = Q4 {
+            x: y,
+            y: x,
+            z: t,
+            w: L::ONE,
+        };
+        let r = V3 {
+            x: t * L::splat(0.01),
+            y: y * L::splat(0.01),
+            z: x * L::splat(0.01),
+        };
+        let (turned, series) = turn_by(q, r);
+        [
+            atan(t),
+            atan2(y, x),
+            scale(&rot, t.abs(), x.abs()),
+            exp_neg(t.abs()),
+            forced(
+                &rot,
+                t.abs(),
+                y * L::splat(1e-3),
+                x.abs(),
+                L::simd_gt(x, 0.0),
+            ),
+            clamp_unit(t),
+            turned.x,
+            turned.w,
+            series,
+            q.normal().z,
+        ]
+        .iter()
+        .flat_map(|v| v.to_array().map(f32::to_bits))
+        .collect()
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx_lanes_give_the_bits_of_the_sse_lanes() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        for i in 0..2000 {
+            let t0 = (i as f32 - 1000.0) * 0.0037 + 1e-4;
+            let t = each(|k| t0 * [1.0, -1.0, 0.01, 40.0][k % 4] + k as f32 * 1e-3);
+            let y = each(|k| [t0, t0, -t0, 0.3, f32::NAN, -0.0, 1e-30, t0][k]);
+            let x = each(|k| [1.0, -0.5, 0.0, t0, 2.0, -1.0, t0 * 3.0, -0.0][k]);
+            assert_eq!(lane_bits::<Sse>(t, y, x), lane_bits::<Avx>(t, y, x), "{t0}");
         }
     }
 

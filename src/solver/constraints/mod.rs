@@ -33,6 +33,8 @@
 //! a turn, the constraint's `Δμ`, and with it its translations, is cut by
 //! the same fraction.
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod avx;
 pub mod curvature;
 pub(crate) mod lanes;
 pub mod normality;
@@ -195,7 +197,7 @@ pub(crate) trait Recorder: Send + Sync {
     /// A turn by the rotation vector `omega` (axis × angle).
     fn turned(&mut self, omega: Vec3);
     /// Turns by the rotation vectors `omega`, in the lanes of `mask`.
-    fn turned_lanes(&mut self, omega: lanes::V3, mask: lanes::Mask);
+    fn turned_lanes<F: lanes::Lane>(&mut self, omega: lanes::V3<F>, mask: F);
     /// A recorder for another thread.
     fn fork(&self) -> Self;
     /// Takes in what a forked recorder gathered (order does not matter).
@@ -211,7 +213,7 @@ impl Recorder for NoRecord {
     #[inline(always)]
     fn turned(&mut self, _: Vec3) {}
     #[inline(always)]
-    fn turned_lanes(&mut self, _: lanes::V3, _: lanes::Mask) {}
+    fn turned_lanes<F: lanes::Lane>(&mut self, _: lanes::V3<F>, _: F) {}
     fn fork(&self) -> Self {
         NoRecord
     }
@@ -226,31 +228,85 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
     (-c - alpha_t * mu) / (w + alpha_t)
 }
 
-/// Projects `items` colour batch by colour batch with `project`, each with
+/// A kernel in both lane types: the same projection of a chunk of
+/// constraints (their items, their multipliers, how many are live, the
+/// recorder), once with [`lanes::Sse`] and once with [`lanes::Avx`] for
+/// [`project_range`]'s AVX2 copy. Made by [`kernel!`], which writes the
+/// closure once.
+pub(crate) struct Kernel<S, A> {
+    sse: S,
+    avx: A,
+}
+
+impl<S, A> Kernel<S, A> {
+    /// The kernel `sse` in [`lanes::Sse`] and `avx` in [`lanes::Avx`].
+    pub(crate) fn new<T, M, R>(sse: S, avx: A) -> Self
+    where
+        S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+        A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    {
+        Self { sse, avx }
+    }
+}
+
+/// The [`Kernel`] of a closure `|items, mu, live, rec| …` in which `F` is
+/// the lane type:
+///
+/// ```ignore
+/// project_batches(crew, &set.items, &mu, &set.batches, rec,
+///     kernel!(|c, m, n, _| stretch::project::<F>(p, c, m, n, alpha_t)));
+/// ```
+///
+/// (Each closure is `#[inline(always)]`, so that the kernel is inlined
+/// into the copy of the chunk loop compiled for its registers.)
+macro_rules! kernel {
+    (|$c:ident, $m:ident, $n:ident, $r:pat_param| $body:expr) => {
+        $crate::solver::constraints::Kernel::new(
+            #[inline(always)]
+            |$c, $m, $n, $r| {
+                #[allow(dead_code)]
+                type F = $crate::solver::constraints::lanes::Sse;
+                $body
+            },
+            #[inline(always)]
+            |$c, $m, $n, $r| {
+                #[allow(dead_code)]
+                type F = $crate::solver::constraints::lanes::Avx;
+                $body
+            },
+        )
+    };
+}
+pub(crate) use kernel;
+
+/// Projects `items` colour batch by colour batch with `kernel`, each with
 /// its own multiplier in `mu` (same index). The threads of `crew` take
 /// blocks of each batch as they come free ([`Crew::claim`]) and wait for
 /// each other before the next: within a batch the order does not matter (no
 /// shared particles), and a constraint's projection does not depend on the
 /// thread or the lane it runs in, so the result is bit-identical for any
-/// number of threads and any split. `project` is handed the share
+/// number of threads and any split. The kernel is handed the share
 /// in chunks of up to [`LANES`] constraints with their multipliers, for the
-/// kernels that project a chunk side by side ([`lanes`]).
+/// kernels that project a chunk side by side ([`lanes`]), in the lane type
+/// of the copy that [`project_range`] picks.
 ///
 /// A run of small batches (a heap of contacts ends in dozens of colours of
 /// a few constraints each) is projected by thread 0 alone, batch after
 /// batch, with one barrier at its end: the same projections in the same
 /// order, without a barrier per batch that costs more than sharing saves.
-pub(crate) fn project_batches<T, M, R>(
+pub(crate) fn project_batches<T, M, R, S, A>(
     crew: &Crew,
     items: &[T],
     mu: &Shared<M>,
     batches: &[Range<usize>],
     rec: &mut R,
-    project: impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    kernel: Kernel<S, A>,
 ) where
     T: Copy,
     M: Copy,
     R: Recorder,
+    S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
 {
     assert_eq!(items.len(), mu.len());
     let small = |b: &Range<usize>| b.len() < SOLO_BATCH;
@@ -266,14 +322,14 @@ pub(crate) fn project_batches<T, M, R>(
         if run > 1 {
             if crew.index() == 0 {
                 for b in now {
-                    project_range(items, mu, b.clone(), rec, &project);
+                    project_range(items, mu, b.clone(), rec, &kernel);
                 }
             }
         } else {
             let block = claim_block(first.len(), crew.size());
             while let Some(mine) = crew.claim(first.len(), block) {
                 let share = first.start + mine.start..first.start + mine.end;
-                project_range(items, mu, share, rec, &project);
+                project_range(items, mu, share, rec, &kernel);
             }
         }
         crew.barrier();
@@ -301,9 +357,68 @@ fn claim_block(len: usize, size: usize) -> usize {
 /// 64 × 64 and 128 × 128 (BENCHMARKS.md, the Intel machine of 2026-11-25).
 const MAX_BLOCK: usize = 512;
 
-/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]).
+/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]),
+/// in AVX registers where the processor has AVX2 ([`avx2`]): the chunk
+/// loop, with the kernel inlined into it, is compiled twice, once for any
+/// processor with [`lanes::Sse`] and once for AVX2 with [`lanes::Avx`].
 #[inline(always)]
-fn project_range<T, M, R>(
+fn project_range<T, M, R, S, A>(
+    items: &[T],
+    mu: &Shared<M>,
+    range: Range<usize>,
+    rec: &mut R,
+    kernel: &Kernel<S, A>,
+) where
+    T: Copy,
+    M: Copy,
+    R: Recorder,
+    S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+{
+    #[cfg(target_arch = "x86_64")]
+    if avx2() {
+        // SAFETY: the processor has AVX2.
+        return unsafe { project_range_avx2(items, mu, range, rec, &kernel.avx) };
+    }
+    project_chunks(items, mu, range, rec, &kernel.sse)
+}
+
+/// [`project_chunks`] compiled for AVX2.
+///
+/// # Safety
+/// The processor must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn project_range_avx2<T, M, R>(
+    items: &[T],
+    mu: &Shared<M>,
+    range: Range<usize>,
+    rec: &mut R,
+    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+) where
+    T: Copy,
+    M: Copy,
+    R: Recorder,
+{
+    project_chunks(items, mu, range, rec, project)
+}
+
+/// Whether the kernels run in AVX registers: the processor has AVX2, and
+/// `WEFT_SIMD` is not `baseline` (which keeps them in SSE registers, to
+/// compare the two; the results are the same bit for bit). Decided once.
+#[cfg(target_arch = "x86_64")]
+pub fn avx2() -> bool {
+    static AVX2: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVX2.get_or_init(|| {
+        std::arch::is_x86_feature_detected!("avx2")
+            && std::env::var_os("WEFT_SIMD").is_none_or(|v| v != "baseline")
+    })
+}
+
+/// Projects `items[range]` in chunks of [`LANES`] with `project`; inlined
+/// into each copy of [`project_range`].
+#[inline(always)]
+fn project_chunks<T, M, R>(
     items: &[T],
     mu: &Shared<M>,
     range: Range<usize>,

@@ -18,15 +18,15 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, F, LANES};
+use super::lanes::{self, Chunk, LANES, Lane};
 use super::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
 /// Projects the normals of up to [`LANES`](lanes::LANES) edges of one
 /// colour toward each other, side by side, with compliance `alpha_t`
 /// (`α / Δt²`, for a square cell).
-#[inline]
-pub(crate) fn project<R: Recorder>(
+#[inline(always)]
+pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
     pairs: &[Pair; LANES],
     mu: &mut [f32; LANES],
@@ -36,13 +36,13 @@ pub(crate) fn project<R: Recorder>(
     rec: &mut R,
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
+    let (ba, bb) = (a.inv_inertia::<F>(p), b.inv_inertia::<F>(p));
     let w = ba + bb;
-    let mut on = lanes::live(live) & !w.simd_le(0.0);
+    let mut on = lanes::live::<F>(live) & !w.simd_le(0.0);
     if on.none() {
         return;
     }
-    let (qa, qb) = (a.q(p), b.q(p));
+    let (qa, qb) = (a.q::<F>(p), b.q::<F>(p));
     let (na, nb) = (qa.normal(), qb.normal());
     // `axis_angle`, lane by lane: the regular case in lanes, the rest alone.
     let axis = na.cross(nb);

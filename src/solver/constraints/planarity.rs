@@ -19,14 +19,14 @@ use glam::Vec3;
 
 use super::Particles;
 use super::Recorder;
-use super::lanes::{self, Chunk, F, LANES};
+use super::lanes::{self, Chunk, LANES, Lane};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
 /// Projects up to [`LANES`](lanes::LANES) edges of one colour side by side,
 /// each from both ends, with compliance `alpha_t` (`α / Δt²`, for a square
 /// cell); `mu` holds each edge's two sides' multipliers.
-#[inline]
-pub(crate) fn project<R: Recorder>(
+#[inline(always)]
+pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
     pairs: &[Pair; LANES],
     mu: &mut [[f32; 2]; LANES],
@@ -38,7 +38,7 @@ pub(crate) fn project<R: Recorder>(
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
     let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
     let mut m = lanes::load_pairs(mu);
-    let live = lanes::live(live);
+    let live = lanes::live::<F>(live);
     // Both sides move both ends: the positions stay in lanes between them
     // and are written once.
     let (mut ea, mut eb) = (End::of(p, &a), End::of(p, &b));
@@ -51,21 +51,21 @@ pub(crate) fn project<R: Recorder>(
 
 /// One end of a chunk's edges: its particles, positions (held in lanes),
 /// inverse masses and inverse inertias.
-struct End<'c> {
+struct End<'c, F: Lane> {
     chunk: &'c Chunk,
-    pos: lanes::Held,
+    pos: lanes::Held<F>,
     w: F,
     beta: F,
 }
 
-impl<'c> End<'c> {
+impl<'c, F: Lane> End<'c, F> {
     #[inline(always)]
     fn of(p: &Particles, chunk: &'c Chunk) -> Self {
         Self {
             chunk,
             pos: lanes::Held::of(p, chunk),
-            w: chunk.inv_mass(p),
-            beta: chunk.inv_inertia(p),
+            w: chunk.inv_mass::<F>(p),
+            beta: chunk.inv_inertia::<F>(p),
         }
     }
 }
@@ -106,16 +106,16 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
 /// `n⊥` the normal made perpendicular to the edge, so the edge turns instead
 /// of shortening and never fights the length limit.
 #[inline(always)]
-fn one_side<R: Recorder>(
+fn one_side<F: Lane, R: Recorder>(
     p: &Particles,
-    (e, o): (&mut End, &mut End),
+    (e, o): (&mut End<F>, &mut End<F>),
     mu: &mut F,
-    live: lanes::Mask,
+    live: F,
     alpha_t: F,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let q = e.chunk.q(p);
+    let q = e.chunk.q::<F>(p);
     let n = q.normal();
     let s = o.pos.x - e.pos.x;
     let len = s.length();

@@ -42,12 +42,15 @@
 
 use glam::Vec3;
 
-use super::lanes::{F, LANES, V3, each};
+use super::lanes::{LANES, Sse as F, each};
 use super::{Particles, delta_mu, shift};
 use crate::solver::broad_phase::{self, NearTriangles, SpatialHash};
 use crate::solver::cloth::{ClothSpec, normal_of};
 use crate::solver::team;
 use crate::solver::topology::{Batched, Topology, Touches};
+
+/// Positions of a contact search, in lanes.
+type V3 = super::lanes::V3<F>;
 
 /// One particle against one triangle, with the side it keeps.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -21,14 +21,14 @@
 use glam::Vec3;
 
 use super::Particles;
-use super::lanes::{self, Chunk, F, LANES};
+use super::lanes::{self, Chunk, LANES, Lane};
 use crate::solver::topology::Pair;
 
 /// Projects up to [`LANES`](lanes::LANES) distance constraints of one colour
 /// side by side, with compliance `alpha_t` (`α / Δt²` for a square cell;
 /// divided by each pair's aspect).
-#[inline]
-pub(crate) fn project(
+#[inline(always)]
+pub(crate) fn project<F: Lane>(
     p: &Particles,
     pairs: &[Pair; LANES],
     mu: &mut [f32; LANES],
@@ -36,11 +36,11 @@ pub(crate) fn project(
     alpha_t: f32,
 ) {
     let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (wa, wb) = (a.inv_mass(p), b.inv_mass(p));
+    let (wa, wb) = (a.inv_mass::<F>(p), b.inv_mass::<F>(p));
     let w = wa + wb;
-    let s = b.x(p) - a.x(p);
+    let s = b.x::<F>(p) - a.x::<F>(p);
     let len = s.length();
-    let on = lanes::live(live) & !w.simd_eq(0.0) & !len.simd_le(1e-9);
+    let on = lanes::live::<F>(live) & !w.simd_eq(0.0) & !len.simd_le(1e-9);
     if on.none() {
         return;
     }
@@ -70,8 +70,8 @@ pub struct Tether {
 
 /// Projects up to [`LANES`](lanes::LANES) tethers of one batch side by
 /// side: pulls each particle back if it is too far.
-#[inline]
-pub(crate) fn project_tethers(
+#[inline(always)]
+pub(crate) fn project_tethers<F: Lane>(
     p: &Particles,
     tethers: &[Tether; LANES],
     mu: &mut [f32; LANES],
@@ -82,13 +82,13 @@ pub(crate) fn project_tethers(
         Chunk::of(tethers, |t| t.particle),
         Chunk::of(tethers, |t| t.anchor),
     );
-    let s = i.x(p) - anchor.x(p);
+    let s = i.x::<F>(p) - anchor.x::<F>(p);
     let len = s.length();
-    let on = lanes::live(live) & !len.simd_le(1e-9);
+    let on = lanes::live::<F>(live) & !len.simd_le(1e-9);
     if on.none() {
         return;
     }
-    let w = i.inv_mass(p);
+    let w = i.inv_mass::<F>(p);
     let rest = lanes::field(tethers, |t| t.rest);
     let alpha_t = F::splat(alpha_t) * lanes::field(tethers, |t| t.span);
     let m = lanes::load(mu);

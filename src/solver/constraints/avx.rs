@@ -1,0 +1,209 @@
+//! Eight lanes in one AVX register ([`F8`]), for the copy of the kernels
+//! that [`project_range`](super::project_range) runs where the processor
+//! has AVX2.
+//!
+//! `wide::f32x8` picks its registers when it is compiled (two SSE
+//! registers, unless every crate is built for AVX), so it cannot give a
+//! copy chosen at run time one AVX register a value. This type does, for
+//! exactly the operations the kernels use ([`Lane`]).
+//!
+//! **The same bits as [`Sse`](super::lanes::Sse).** Every operation is an
+//! IEEE addition, subtraction, multiplication, division or square root
+//! (correctly rounded in any register; nothing fused into a multiply-add),
+//! a comparison, or a bit operation; `min` and `max` are `minps`/`maxps`
+//! with a NaN on the right ignored, as `wide`'s.
+//!
+//! **Only inside AVX2 code.** The methods use AVX and AVX2 instructions
+//! through `core::arch` and are `#[inline(always)]`, so that they become
+//! instructions in the function compiled with
+//! `#[target_feature(enable = "avx2")]` they are inlined into. Called from
+//! anywhere else they would be calls, or fault on a processor without AVX2:
+//! only `project_range`'s AVX2 copy uses them, after checking.
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitAnd, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
+
+use super::lanes::{LANES, Lane};
+
+/// Eight `f32`s in one AVX register.
+#[derive(Clone, Copy, Debug)]
+#[repr(transparent)]
+pub(crate) struct F8(__m256);
+
+impl F8 {
+    /// The lanes `v`, in a constant.
+    const fn of(v: [f32; LANES]) -> Self {
+        // SAFETY: the same size, and any bits are a valid `__m256`.
+        unsafe { std::mem::transmute(v) }
+    }
+}
+
+// SAFETY (every `unsafe` block below): the instructions are AVX or AVX2,
+// which the processor has wherever these run (see the module docs).
+impl Lane for F8 {
+    const ZERO: Self = Self::of([0.0; LANES]);
+    const ONE: Self = Self::of([1.0; LANES]);
+    const PI: Self = Self::of([std::f32::consts::PI; LANES]);
+    const FRAC_PI_2: Self = Self::of([std::f32::consts::FRAC_PI_2; LANES]);
+
+    #[inline(always)]
+    fn new(v: [f32; LANES]) -> Self {
+        Self::of(v)
+    }
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        unsafe { Self(_mm256_set1_ps(v)) }
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; LANES] {
+        // SAFETY: the same size, and any bits are valid `f32`s.
+        unsafe { std::mem::transmute(self) }
+    }
+    #[inline(always)]
+    fn as_array(&self) -> &[f32; LANES] {
+        // SAFETY: `repr(transparent)` over 32 bytes of eight `f32`s.
+        unsafe { &*(self as *const Self).cast::<[f32; LANES]>() }
+    }
+    #[inline(always)]
+    fn as_mut_array(&mut self) -> &mut [f32; LANES] {
+        // SAFETY: as `as_array`.
+        unsafe { &mut *(self as *mut Self).cast::<[f32; LANES]>() }
+    }
+    #[inline(always)]
+    fn simd_lt(self, o: impl Into<Self>) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.into().0)) }
+    }
+    #[inline(always)]
+    fn simd_le(self, o: impl Into<Self>) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.into().0)) }
+    }
+    #[inline(always)]
+    fn simd_gt(self, o: impl Into<Self>) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.into().0)) }
+    }
+    #[inline(always)]
+    fn simd_ge(self, o: impl Into<Self>) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.into().0)) }
+    }
+    #[inline(always)]
+    fn simd_eq(self, o: impl Into<Self>) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.into().0)) }
+    }
+    #[inline(always)]
+    fn is_nan(self) -> Self {
+        unsafe { Self(_mm256_cmp_ps::<_CMP_UNORD_Q>(self.0, self.0)) }
+    }
+    #[inline(always)]
+    fn select(self, t: Self, f: Self) -> Self {
+        unsafe { Self(_mm256_blendv_ps(f.0, t.0, self.0)) }
+    }
+    #[inline(always)]
+    fn to_bitmask(self) -> u32 {
+        unsafe { _mm256_movemask_ps(self.0) as u32 }
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.to_bitmask() != 0
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self.to_bitmask() == 0xff
+    }
+    #[inline(always)]
+    fn none(self) -> bool {
+        self.to_bitmask() == 0
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        unsafe { Self(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)) }
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        unsafe {
+            let bit = _mm256_set1_ps(-0.0);
+            Self(_mm256_or_ps(
+                _mm256_andnot_ps(bit, self.0),
+                _mm256_and_ps(bit, sign.0),
+            ))
+        }
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        o.is_nan()
+            .select(self, unsafe { Self(_mm256_max_ps(self.0, o.0)) })
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        o.is_nan()
+            .select(self, unsafe { Self(_mm256_min_ps(self.0, o.0)) })
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        unsafe { Self(_mm256_sqrt_ps(self.0)) }
+    }
+    #[inline(always)]
+    fn pow2(self, bias: i32) -> Self {
+        unsafe {
+            let bits = _mm256_sub_epi32(_mm256_castps_si256(self.0), _mm256_set1_epi32(bias));
+            Self(_mm256_castsi256_ps(_mm256_slli_epi32::<23>(bits)))
+        }
+    }
+}
+
+impl From<f32> for F8 {
+    #[inline(always)]
+    fn from(v: f32) -> Self {
+        Self::splat(v)
+    }
+}
+
+/// `impl $op for F8` by the instruction `$instr`.
+macro_rules! binary {
+    ($op:ident, $method:ident, $instr:ident) => {
+        impl $op for F8 {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                // SAFETY: see `impl Lane for F8`.
+                unsafe { Self($instr(self.0, o.0)) }
+            }
+        }
+    };
+}
+binary!(Add, add, _mm256_add_ps);
+binary!(Sub, sub, _mm256_sub_ps);
+binary!(Mul, mul, _mm256_mul_ps);
+binary!(Div, div, _mm256_div_ps);
+binary!(BitAnd, bitand, _mm256_and_ps);
+binary!(BitOr, bitor, _mm256_or_ps);
+
+impl BitOrAssign for F8 {
+    #[inline(always)]
+    fn bitor_assign(&mut self, o: Self) {
+        *self = *self | o;
+    }
+}
+
+impl Neg for F8 {
+    type Output = Self;
+    /// The sign bit flipped, as `wide`'s.
+    #[inline(always)]
+    fn neg(self) -> Self {
+        // SAFETY: see `impl Lane for F8`.
+        unsafe { Self(_mm256_xor_ps(self.0, _mm256_set1_ps(-0.0))) }
+    }
+}
+
+impl Not for F8 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        // SAFETY: see `impl Lane for F8`.
+        unsafe {
+            Self(_mm256_xor_ps(
+                self.0,
+                _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
+            ))
+        }
+    }
+}
