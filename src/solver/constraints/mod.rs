@@ -40,6 +40,7 @@ pub(crate) mod lanes;
 pub mod normality;
 pub mod planarity;
 pub mod self_collision;
+mod sse;
 pub mod stretch;
 
 use std::ops::Range;
@@ -235,6 +236,7 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 /// closure once.
 pub(crate) struct Kernel<S, A> {
     sse: S,
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx: A,
 }
 
@@ -407,7 +409,7 @@ unsafe fn project_range_avx2<T, M, R>(
 /// `WEFT_SIMD` is not `baseline` (which keeps them in SSE registers, to
 /// compare the two; the results are the same bit for bit). Decided once.
 #[cfg(target_arch = "x86_64")]
-pub fn avx2() -> bool {
+fn avx2() -> bool {
     static AVX2: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *AVX2.get_or_init(|| {
         std::arch::is_x86_feature_detected!("avx2")
