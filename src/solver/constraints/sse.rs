@@ -5,6 +5,30 @@
 
 use super::lanes::{LANES, Lane, Sse};
 
+/// Trait methods that are `wide`'s methods of the same name and signature.
+macro_rules! wide_s {
+    ($(fn $name:ident($($arg:ident: $ty:ty),*) -> $out:ty;)*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, $($arg: $ty),*) -> $out {
+                wide::f32x8::$name(self, $($arg),*)
+            }
+        )*
+    };
+}
+
+/// Comparisons, whose right side may be a lane value or an `f32`.
+macro_rules! compare {
+    ($($name:ident),*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, o: impl Into<Self>) -> Self {
+                wide::f32x8::$name(self, o.into())
+            }
+        )*
+    };
+}
+
 impl Lane for Sse {
     const ZERO: Self = wide::f32x8::ZERO;
     const ONE: Self = wide::f32x8::ONE;
@@ -19,10 +43,6 @@ impl Lane for Sse {
         wide::f32x8::splat(v)
     }
     #[inline(always)]
-    fn to_array(self) -> [f32; LANES] {
-        wide::f32x8::to_array(self)
-    }
-    #[inline(always)]
     fn as_array(&self) -> &[f32; LANES] {
         wide::f32x8::as_array(self)
     }
@@ -30,69 +50,20 @@ impl Lane for Sse {
     fn as_mut_array(&mut self) -> &mut [f32; LANES] {
         wide::f32x8::as_mut_array(self)
     }
-    #[inline(always)]
-    fn simd_lt(self, o: impl Into<Self>) -> Self {
-        wide::f32x8::simd_lt(self, o.into())
-    }
-    #[inline(always)]
-    fn simd_le(self, o: impl Into<Self>) -> Self {
-        wide::f32x8::simd_le(self, o.into())
-    }
-    #[inline(always)]
-    fn simd_gt(self, o: impl Into<Self>) -> Self {
-        wide::f32x8::simd_gt(self, o.into())
-    }
-    #[inline(always)]
-    fn simd_ge(self, o: impl Into<Self>) -> Self {
-        wide::f32x8::simd_ge(self, o.into())
-    }
-    #[inline(always)]
-    fn simd_eq(self, o: impl Into<Self>) -> Self {
-        wide::f32x8::simd_eq(self, o.into())
-    }
-    #[inline(always)]
-    fn is_nan(self) -> Self {
-        wide::f32x8::is_nan(self)
-    }
-    #[inline(always)]
-    fn select(self, t: Self, f: Self) -> Self {
-        wide::f32x8::select(self, t, f)
-    }
-    #[inline(always)]
-    fn to_bitmask(self) -> u32 {
-        wide::f32x8::to_bitmask(self)
-    }
-    #[inline(always)]
-    fn any(self) -> bool {
-        wide::f32x8::any(self)
-    }
-    #[inline(always)]
-    fn all(self) -> bool {
-        wide::f32x8::all(self)
-    }
-    #[inline(always)]
-    fn none(self) -> bool {
-        wide::f32x8::none(self)
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        wide::f32x8::abs(self)
-    }
-    #[inline(always)]
-    fn copysign(self, sign: Self) -> Self {
-        wide::f32x8::copysign(self, sign)
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        wide::f32x8::max(self, o)
-    }
-    #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        wide::f32x8::min(self, o)
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        wide::f32x8::sqrt(self)
+    compare!(simd_lt, simd_le, simd_gt, simd_ge, simd_eq);
+    wide_s! {
+        fn to_array() -> [f32; LANES];
+        fn is_nan() -> Self;
+        fn select(t: Self, f: Self) -> Self;
+        fn to_bitmask() -> u32;
+        fn any() -> bool;
+        fn all() -> bool;
+        fn none() -> bool;
+        fn abs() -> Self;
+        fn copysign(sign: Self) -> Self;
+        fn max(o: Self) -> Self;
+        fn min(o: Self) -> Self;
+        fn sqrt() -> Self;
     }
     #[inline(always)]
     fn pow2(self, bias: i32) -> Self {
