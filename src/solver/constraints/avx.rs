@@ -38,6 +38,20 @@ impl F8 {
     }
 }
 
+/// Ordered comparisons (false where either lane is NaN), whose right side
+/// may be a lane value or an `f32`: `name: predicate` of `_mm256_cmp_ps`.
+macro_rules! compare {
+    ($($name:ident: $predicate:ident,)*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, o: impl Into<Self>) -> Self {
+                // SAFETY: see `impl Lane for F8`.
+                unsafe { Self(_mm256_cmp_ps::<$predicate>(self.0, o.into().0)) }
+            }
+        )*
+    };
+}
+
 // SAFETY (every `unsafe` block below): the instructions are AVX or AVX2,
 // which the processor has wherever these run (see the module docs).
 impl Lane for F8 {
@@ -69,25 +83,12 @@ impl Lane for F8 {
         // SAFETY: as `as_array`.
         unsafe { &mut *(self as *mut Self).cast::<[f32; LANES]>() }
     }
-    #[inline(always)]
-    fn simd_lt(self, o: impl Into<Self>) -> Self {
-        unsafe { Self(_mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.into().0)) }
-    }
-    #[inline(always)]
-    fn simd_le(self, o: impl Into<Self>) -> Self {
-        unsafe { Self(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.into().0)) }
-    }
-    #[inline(always)]
-    fn simd_gt(self, o: impl Into<Self>) -> Self {
-        unsafe { Self(_mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.into().0)) }
-    }
-    #[inline(always)]
-    fn simd_ge(self, o: impl Into<Self>) -> Self {
-        unsafe { Self(_mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.into().0)) }
-    }
-    #[inline(always)]
-    fn simd_eq(self, o: impl Into<Self>) -> Self {
-        unsafe { Self(_mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.into().0)) }
+    compare! {
+        simd_lt: _CMP_LT_OQ,
+        simd_le: _CMP_LE_OQ,
+        simd_gt: _CMP_GT_OQ,
+        simd_ge: _CMP_GE_OQ,
+        simd_eq: _CMP_EQ_OQ,
     }
     #[inline(always)]
     fn is_nan(self) -> Self {
