@@ -23,7 +23,7 @@ use glam::Quat;
 
 use super::{
     cloth::ClothState,
-    constraints::lanes::{LANES, Lane, V3},
+    constraints::lanes::{Lane, V3, WIDE_LANES},
     constraints::{Particles, Recorder, Shared, atan2},
     family::{Family, PerFamily},
     team::Crew,
@@ -165,12 +165,12 @@ impl Diagnostics {
 }
 
 /// Records the largest forced rotation a family applies, as its square
-/// (lane by lane for the kernels that turn eight particles at once); one
+/// (lane by lane for the kernels that turn a chunk's particles at once); one
 /// per thread, joined after the phase.
 #[derive(Clone, Copy, Default)]
 pub(crate) struct LargestTurn {
     squared: f32,
-    lanes: [f32; LANES],
+    lanes: [f32; WIDE_LANES],
 }
 
 impl LargestTurn {
@@ -192,7 +192,8 @@ impl Recorder for LargestTurn {
     #[inline(always)]
     fn turned_lanes<F: Lane>(&mut self, omega: V3<F>, mask: F) {
         let squared = mask.select(omega.length_squared(), F::ZERO);
-        self.lanes = F::new(self.lanes).max(squared).to_array();
+        let lanes = F::chunk_mut(&mut self.lanes[..F::N]);
+        *lanes = F::new(*lanes).max(squared).to_array();
     }
     fn fork(&self) -> Self {
         Self::default()

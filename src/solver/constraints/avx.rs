@@ -1,6 +1,7 @@
-//! Eight lanes in one AVX register ([`F8`]), for the copy of the kernels
-//! that [`project_range`](super::project_range) runs where the processor
-//! has AVX2.
+//! Eight lanes in one AVX register ([`F8`]), and sixteen in two ([`F16`],
+//! for long batches), for the copy of the kernels that
+//! [`project_range`](super::project_range) runs where the processor has
+//! AVX2.
 //!
 //! `wide::f32x8` picks its registers when it is compiled (two SSE
 //! registers, unless every crate is built for AVX), so it cannot give a
@@ -23,7 +24,7 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
 
-use super::lanes::{LANES, Lane};
+use super::lanes::{LANES, Lane, WIDE_LANES, each};
 
 /// Eight `f32`s in one AVX register.
 #[derive(Clone, Copy, Debug)]
@@ -55,6 +56,20 @@ macro_rules! compare {
 // SAFETY (every `unsafe` block below): the instructions are AVX or AVX2,
 // which the processor has wherever these run (see the module docs).
 impl Lane for F8 {
+    const N: usize = LANES;
+    type Array<T: Copy> = [T; LANES];
+    #[inline(always)]
+    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; LANES] {
+        each(f)
+    }
+    #[inline(always)]
+    fn chunk<T: Copy>(items: &[T]) -> &[T; LANES] {
+        items.try_into().expect("a whole chunk")
+    }
+    #[inline(always)]
+    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; LANES] {
+        items.try_into().expect("a whole chunk")
+    }
     const ZERO: Self = Self::of([0.0; LANES]);
     const ONE: Self = Self::of([1.0; LANES]);
     const PI: Self = Self::of([std::f32::consts::PI; LANES]);
@@ -206,5 +221,176 @@ impl Not for F8 {
                 _mm256_castsi256_ps(_mm256_set1_epi32(-1)),
             ))
         }
+    }
+}
+
+/// Sixteen `f32`s in two AVX registers: the lanes of a long batch's chunks
+/// ([`project_range`](super::project_range)). Each operation is [`F8`]'s on
+/// both halves, so a lane's bits do not depend on the half it is in.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
+pub(crate) struct F16(F8, F8);
+
+impl F16 {
+    /// Both halves `v`.
+    const fn halves(v: F8) -> Self {
+        Self(v, v)
+    }
+}
+
+/// Trait methods that apply [`F8`]'s method of the same name to both
+/// halves, with the arguments' halves.
+macro_rules! halves {
+    ($(fn $name:ident($($arg:ident),*);)*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, $($arg: Self),*) -> Self {
+                Self(self.0.$name($($arg.0),*), self.1.$name($($arg.1),*))
+            }
+        )*
+    };
+}
+
+/// Comparisons on both halves, whose right side may be a lane value or an
+/// `f32`.
+macro_rules! compare_halves {
+    ($($name:ident),*) => {
+        $(
+            #[inline(always)]
+            fn $name(self, o: impl Into<Self>) -> Self {
+                let o = o.into();
+                Self(self.0.$name(o.0), self.1.$name(o.1))
+            }
+        )*
+    };
+}
+
+impl Lane for F16 {
+    const N: usize = WIDE_LANES;
+    type Array<T: Copy> = [T; WIDE_LANES];
+    #[inline(always)]
+    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; WIDE_LANES] {
+        std::array::from_fn(f)
+    }
+    #[inline(always)]
+    fn chunk<T: Copy>(items: &[T]) -> &[T; WIDE_LANES] {
+        items.try_into().expect("a whole chunk")
+    }
+    #[inline(always)]
+    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; WIDE_LANES] {
+        items.try_into().expect("a whole chunk")
+    }
+    const ZERO: Self = Self::halves(F8::ZERO);
+    const ONE: Self = Self::halves(F8::ONE);
+    const PI: Self = Self::halves(F8::PI);
+    const FRAC_PI_2: Self = Self::halves(F8::FRAC_PI_2);
+
+    #[inline(always)]
+    fn new(v: [f32; WIDE_LANES]) -> Self {
+        // SAFETY: `repr(C)` over two 32-byte halves, no padding; any bits
+        // are valid `f32`s.
+        unsafe { std::mem::transmute(v) }
+    }
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Self::halves(F8::splat(v))
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; WIDE_LANES] {
+        // SAFETY: as `new`.
+        unsafe { std::mem::transmute(self) }
+    }
+    #[inline(always)]
+    fn as_array(&self) -> &[f32; WIDE_LANES] {
+        // SAFETY: as `new`.
+        unsafe { &*(self as *const Self).cast::<[f32; WIDE_LANES]>() }
+    }
+    #[inline(always)]
+    fn as_mut_array(&mut self) -> &mut [f32; WIDE_LANES] {
+        // SAFETY: as `new`.
+        unsafe { &mut *(self as *mut Self).cast::<[f32; WIDE_LANES]>() }
+    }
+    compare_halves!(simd_lt, simd_le, simd_gt, simd_ge, simd_eq);
+    halves! {
+        fn is_nan();
+        fn select(t, f);
+        fn abs();
+        fn copysign(sign);
+        fn max(o);
+        fn min(o);
+        fn sqrt();
+    }
+    #[inline(always)]
+    fn to_bitmask(self) -> u32 {
+        self.0.to_bitmask() | self.1.to_bitmask() << LANES
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        (self.0 | self.1).any()
+    }
+    #[inline(always)]
+    fn all(self) -> bool {
+        (self.0 & self.1).all()
+    }
+    #[inline(always)]
+    fn none(self) -> bool {
+        (self.0 | self.1).none()
+    }
+    #[inline(always)]
+    fn pow2(self, bias: i32) -> Self {
+        Self(self.0.pow2(bias), self.1.pow2(bias))
+    }
+}
+
+impl From<f32> for F16 {
+    #[inline(always)]
+    fn from(v: f32) -> Self {
+        Self::splat(v)
+    }
+}
+
+/// `impl $op for F16` by [`F8`]'s on both halves.
+macro_rules! binary_halves {
+    ($($op:ident, $method:ident;)*) => {
+        $(
+            impl $op for F16 {
+                type Output = Self;
+                #[inline(always)]
+                fn $method(self, o: Self) -> Self {
+                    Self(self.0.$method(o.0), self.1.$method(o.1))
+                }
+            }
+        )*
+    };
+}
+binary_halves! {
+    Add, add;
+    Sub, sub;
+    Mul, mul;
+    Div, div;
+    BitAnd, bitand;
+    BitOr, bitor;
+}
+
+impl BitOrAssign for F16 {
+    #[inline(always)]
+    fn bitor_assign(&mut self, o: Self) {
+        *self = *self | o;
+    }
+}
+
+impl Neg for F16 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(-self.0, -self.1)
+    }
+}
+
+impl Not for F16 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Self(!self.0, !self.1)
     }
 }

@@ -29,30 +29,30 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, LANES, Lane, V3};
+use super::lanes::{self, Chunk, Lane, V3};
 use super::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Triple};
 
-/// Projects up to [`LANES`](lanes::LANES) bend triples of one colour side by
+/// Projects up to `F::N` bend triples of one colour side by
 /// side, with compliance `alpha_t` (`α / Δt²`, for a square cell); `mu`
 /// holds each triple's sagitta and bend angle multipliers.
 #[inline(always)]
 pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
-    triples: &[Triple; LANES],
-    mu: &mut [[f32; 2]; LANES],
+    triples: &F::Array<Triple>,
+    mu: &mut F::Array<[f32; 2]>,
     live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let a = Chunk::of(triples, |t| t.a);
-    let m = Chunk::of(triples, |t| t.mid);
-    let b = Chunk::of(triples, |t| t.b);
-    let (qa, qb) = (a.q::<F>(p), b.q::<F>(p));
+    let a = Chunk::<F>::of(triples, |t| t.a);
+    let m = Chunk::<F>::of(triples, |t| t.mid);
+    let b = Chunk::<F>::of(triples, |t| t.b);
+    let (qa, qb) = (a.q(p), b.q(p));
     let (na, nb) = (qa.normal(), qb.normal());
-    let (xa, xm, xb) = (a.x::<F>(p), m.x::<F>(p), b.x::<F>(p));
-    let rest = lanes::field(triples, |t| t.rest);
+    let (xa, xm, xb) = (a.x(p), m.x(p), b.x(p));
+    let rest = lanes::field::<F, _>(triples, |t| t.rest);
     // `sagitta`, in lanes; a straight run has nothing to bend back.
     let chord = xb - xa;
     let offset = xm - (xa + xb) * F::splat(0.5);
@@ -64,13 +64,13 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     }
     let c = F::splat(4.0) * len / rest;
     let across = across * (F::ONE / len);
-    let alpha_t = F::splat(alpha_t) / lanes::field(triples, |t| t.aspect);
-    let mut mus = lanes::load_pairs(mu);
+    let alpha_t = F::splat(alpha_t) / lanes::field::<F, _>(triples, |t| t.aspect);
+    let mut mus = lanes::load_pairs::<F>(mu);
 
     // Translation: the middle onto the chord, along the mean normal made
     // perpendicular to the chord (so the run bends, not stretches).
     // Gradients 2n̂/L at the middle and −n̂/L at each end (L = rest / 2).
-    let (wa, wm, wb) = (a.inv_mass::<F>(p), m.inv_mass::<F>(p), b.inv_mass::<F>(p));
+    let (wa, wm, wb) = (a.inv_mass(p), m.inv_mass(p), b.inv_mass(p));
     let inv_half = F::splat(2.0) / rest;
     let w = (F::splat(4.0) * wm + wa + wb) * inv_half * inv_half;
     let on = bent & w.simd_gt(0.0);
@@ -87,7 +87,7 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     // e = n̂ × chord; the bend angle β from n_a to n_b about e has gradients
     // −e at a and +e at b. Over a run of two edges it counts four times
     // less than the sagitta angle, so its compliance is four times larger.
-    let (ba, bb) = (a.inv_inertia::<F>(p), b.inv_inertia::<F>(p));
+    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
     let e = across.cross(chord);
     let e_len = e.length();
     let on = bent & !((ba + bb).simd_le(0.0) | e_len.simd_le(1e-9));

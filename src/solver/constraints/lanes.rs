@@ -1,20 +1,25 @@
-//! Eight constraints at a time: SIMD lanes over a colour batch.
+//! Eight or sixteen constraints at a time: SIMD lanes over a colour batch.
 //!
 //! The kernels are chains of dependent operations (a length, a reciprocal,
 //! an angle, a division for `Δμ`, a turn), so one constraint at a time
 //! leaves the core waiting on latencies. The constraints of a colour batch
-//! share no free particle, so [`LANES`] of them can be projected side by
+//! share no free particle, so eight or sixteen of them can be projected side by
 //! side: their inputs are gathered into lanes ([`V3`], [`Q4`], one
 //! [`Lane`] value per component), every operation runs on all lanes at
 //! once, and the results are scattered back constraint by constraint.
 //!
-//! **Two lane types, one kernel.** The kernels are generic over the lane
-//! type and compiled twice: with [`Sse`] (`wide::f32x8`, two SSE registers
-//! a value) for any processor, and with [`Avx`] (one AVX register a value,
-//! `constraints/avx.rs`) in a copy of the chunk loop compiled for AVX2,
-//! which [`project_range`](super::project_range) takes where the processor
-//! has it: 2–4 % faster steps on the benchmark sheets, the same bits
-//! (BENCHMARKS.md, "the kernels in AVX registers").
+//! **Three lane types, one kernel.** The kernels are generic over the lane
+//! type, whose width (`Lane::N`) sets the chunk's (`Lane::Array`), and
+//! compiled three times: with [`Sse`] (`wide::f32x8`, two SSE registers a
+//! value) for any processor; and in a copy of the chunk loops compiled for
+//! AVX2, which [`project_range`](super::project_range) takes where the
+//! processor has it, with [`Avx`] (eight lanes in one AVX register) and
+//! [`Avx16`] (sixteen in two, for the batches long enough to be shared
+//! between threads). The same bits in all three; against `Sse`, 2–4 %
+//! faster steps for eight AVX lanes and another 5–10 % for sixteen on the
+//! benchmark sheets (BENCHMARKS.md, "the kernels in AVX registers",
+//! "sixteen lanes for long batches"). A small cloth's short batches keep
+//! eight: two registers a value spill more, and its particles stay in cache.
 //!
 //! **Same result as one at a time.** Every lane runs exactly the operations,
 //! in exactly the order, of the scalar formula it stands for (IEEE addition,
@@ -27,7 +32,7 @@
 //! constraint's correction does not depend on which chunk, lane or thread
 //! projects it, and results stay bit-identical for any number of threads.
 //!
-//! A chunk shorter than [`LANES`] (the end of a thread's share) is padded
+//! A chunk shorter than its lanes (the end of a thread's share) is padded
 //! with copies of its first constraint, which are computed and never
 //! written (see [`live`] and [`project_batches`](super::project_batches)).
 
@@ -39,14 +44,21 @@ use super::{ATAN_POLY, NoRecord, Particles, Recorder, SMALL_ANGLE_FLOOR, shift, 
 use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
 use crate::solver::forced_rotation::ForcedRotation;
 
-/// Constraints projected side by side.
+/// Constraints projected side by side: a chunk of [`Sse`] or [`Avx`].
 pub(crate) const LANES: usize = 8;
 
-/// One `f32` per lane, [`LANES`] of them: what the kernels compute in. A
-/// mask is a lane value too, all bits set where true. Two types implement
+/// Constraints projected side by side in a long batch's chunks, in the
+/// AVX2 copy: a chunk of [`Avx16`].
+pub(crate) const WIDE_LANES: usize = 16;
+
+/// A chunk's worth of `T` in lane type `L`: `[T; L::N]`.
+pub(crate) type Array<L, T> = <L as Lane>::Array<T>;
+
+/// One `f32` per lane, `N` of them: what the kernels compute in. A
+/// mask is a lane value too, all bits set where true. Three types implement
 /// it, with the same results bit for bit: [`Sse`] for any x86-64 (and other
-/// processors), and [`Avx`] in the copy of the kernels compiled for AVX2
-/// ([`project_range`](super::project_range)).
+/// processors), and [`Avx`] and [`Avx16`] in the copy of the kernels
+/// compiled for AVX2 ([`project_range`](super::project_range)).
 pub(crate) trait Lane:
     Copy
     + From<f32>
@@ -60,6 +72,16 @@ pub(crate) trait Lane:
     + BitOrAssign
     + Not<Output = Self>
 {
+    /// How many lanes: [`LANES`], or [`WIDE_LANES`] for [`Avx16`].
+    const N: usize;
+    /// `N` values of `T`, one per lane: `[T; N]`.
+    type Array<T: Copy>: Copy + AsRef<[T]> + AsMut<[T]>;
+    /// `[f(0), f(1), …]`, one per lane.
+    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> Self::Array<T>;
+    /// `items` (exactly `N` of them) as an array.
+    fn chunk<T: Copy>(items: &[T]) -> &Self::Array<T>;
+    /// `items` (exactly `N` of them) as an array, to change.
+    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut Self::Array<T>;
     /// 0 in every lane.
     const ZERO: Self;
     /// 1 in every lane.
@@ -69,15 +91,25 @@ pub(crate) trait Lane:
     /// π/2 in every lane.
     const FRAC_PI_2: Self;
     /// The lanes `v`.
-    fn new(v: [f32; LANES]) -> Self;
+    fn new(v: Self::Array<f32>) -> Self;
     /// `v` in every lane.
     fn splat(v: f32) -> Self;
     /// The lanes as an array.
-    fn to_array(self) -> [f32; LANES];
+    fn to_array(self) -> Self::Array<f32>;
     /// The lanes, borrowed.
-    fn as_array(&self) -> &[f32; LANES];
+    fn as_array(&self) -> &Self::Array<f32>;
     /// The lanes, borrowed to change.
-    fn as_mut_array(&mut self) -> &mut [f32; LANES];
+    fn as_mut_array(&mut self) -> &mut Self::Array<f32>;
+    /// Lane `k`.
+    #[inline(always)]
+    fn at(&self, k: usize) -> f32 {
+        self.as_array().as_ref()[k]
+    }
+    /// Sets lane `k` to `v`.
+    #[inline(always)]
+    fn set(&mut self, k: usize, v: f32) {
+        self.as_mut_array().as_mut()[k] = v;
+    }
     /// The mask of `self < o` (false where either is NaN); and so on.
     fn simd_lt(self, o: impl Into<Self>) -> Self;
     /// See [`Lane::simd_lt`].
@@ -124,82 +156,92 @@ pub(crate) type Sse = wide::f32x8;
 #[cfg(target_arch = "x86_64")]
 pub(crate) type Avx = super::avx::F8;
 
+/// Sixteen lanes in two AVX registers, for the long batches' chunks in the
+/// copy of the kernels compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+pub(crate) type Avx16 = super::avx::F16;
+
 /// Elsewhere the AVX2 copy is never chosen; its kernels use [`Sse`].
 #[cfg(not(target_arch = "x86_64"))]
 pub(crate) type Avx = Sse;
 
+/// See [`Avx`].
+#[cfg(not(target_arch = "x86_64"))]
+pub(crate) type Avx16 = Sse;
+
 /// The particle indices of one role (say, every constraint's first end)
-/// across a chunk of [`LANES`] constraints.
+/// across a chunk of `F::N` constraints.
 #[derive(Clone, Copy)]
-pub(crate) struct Chunk {
-    idx: [usize; LANES],
+pub(crate) struct Chunk<F: Lane> {
+    idx: F::Array<usize>,
 }
 
-/// `[f(0), f(1), …]`, one per lane.
+/// `[f(0), f(1), …]`, one per lane of an eight-lane type.
 #[inline(always)]
-pub(crate) fn each<U>(f: impl Fn(usize) -> U) -> [U; LANES] {
+pub(crate) fn each<U>(mut f: impl FnMut(usize) -> U) -> [U; LANES] {
     [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)]
 }
 
 /// The mask of the first `live` lanes.
 #[inline(always)]
 pub(crate) fn live<F: Lane>(live: usize) -> F {
-    let lane = F::new([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    let lane = F::new(F::each(|k| k as f32));
     lane.simd_lt(F::splat(live as f32))
 }
 
-impl Chunk {
+impl<F: Lane> Chunk<F> {
     /// The indices `f(item)` of a chunk's constraints.
     #[inline(always)]
-    pub(crate) fn of<T: Copy>(items: &[T; LANES], f: impl Fn(T) -> u32) -> Self {
+    pub(crate) fn of<T: Copy>(items: &F::Array<T>, f: impl Fn(T) -> u32) -> Self {
         Self {
-            idx: each(|k| f(items[k]) as usize),
+            idx: F::each(|k| f(items.as_ref()[k]) as usize),
         }
     }
 
     /// The particle index in lane `k`.
     #[inline(always)]
     pub(crate) fn at(&self, k: usize) -> usize {
-        self.idx[k]
+        self.idx.as_ref()[k]
     }
 
     /// Each lane's inverse mass.
     #[inline(always)]
-    pub(crate) fn inv_mass<F: Lane>(&self, p: &Particles) -> F {
-        F::new(each(|k| p.inv_mass_of(self.idx[k])))
+    pub(crate) fn inv_mass(&self, p: &Particles) -> F {
+        F::new(F::each(|k| p.inv_mass_of(self.at(k))))
     }
 
     /// Each lane's inverse inertia.
     #[inline(always)]
-    pub(crate) fn inv_inertia<F: Lane>(&self, p: &Particles) -> F {
-        F::new(each(|k| p.inv_inertia_of(self.idx[k])))
+    pub(crate) fn inv_inertia(&self, p: &Particles) -> F {
+        F::new(F::each(|k| p.inv_inertia_of(self.at(k))))
     }
 
     /// Each lane's position.
     #[inline(always)]
-    pub(crate) fn x<F: Lane>(&self, p: &Particles) -> V3<F> {
-        V3::from_lanes(each(|k| p.x(self.idx[k])))
+    pub(crate) fn x(&self, p: &Particles) -> V3<F> {
+        V3::from_lanes(F::each(|k| p.x(self.at(k))))
     }
 
     /// Each lane's orientation.
     #[inline(always)]
-    pub(crate) fn q<F: Lane>(&self, p: &Particles) -> Q4<F> {
-        let q = each(|k| p.q(self.idx[k]));
+    pub(crate) fn q(&self, p: &Particles) -> Q4<F> {
+        let q = F::each(|k| p.q(self.at(k)));
+        let q = q.as_ref();
         Q4 {
-            x: F::new(each(|k| q[k].x)),
-            y: F::new(each(|k| q[k].y)),
-            z: F::new(each(|k| q[k].z)),
-            w: F::new(each(|k| q[k].w)),
+            x: F::new(F::each(|k| q[k].x)),
+            y: F::new(F::each(|k| q[k].y)),
+            z: F::new(F::each(|k| q[k].z)),
+            w: F::new(F::each(|k| q[k].w)),
         }
     }
 
     /// Moves each lane's particle by its `dx`, in the lanes of `mask`.
     #[inline(always)]
-    pub(crate) fn shift<F: Lane>(&self, p: &Particles, dx: V3<F>, mask: F) {
+    pub(crate) fn shift(&self, p: &Particles, dx: V3<F>, mask: F) {
         let bits = mask.to_bitmask();
-        for k in 0..LANES {
+        for k in 0..F::N {
             if bits & (1 << k) != 0 {
-                shift(p, self.idx[k], dx.lane(k));
+                shift(p, self.at(k), dx.lane(k));
             }
         }
     }
@@ -208,7 +250,7 @@ impl Chunk {
     /// rotation vector `omega`, in the lanes of `mask` (as
     /// [`super::turn`]).
     #[inline(always)]
-    pub(crate) fn turn<R: Recorder, F: Lane>(
+    pub(crate) fn turn<R: Recorder>(
         &self,
         p: &Particles,
         q: Q4<F>,
@@ -225,11 +267,11 @@ impl Chunk {
         }
         let (turned, series) = turn_by(q, omega);
         let series = series.to_bitmask();
-        for k in 0..LANES {
+        for k in 0..F::N {
             if bits & (1 << k) == 0 {
                 continue;
             }
-            let i = self.idx[k];
+            let i = self.at(k);
             if series & (1 << k) == 0 {
                 turn(p, i, omega.lane(k), &mut NoRecord);
                 continue;
@@ -252,7 +294,7 @@ pub(crate) struct Held<F: Lane> {
 impl<F: Lane> Held<F> {
     /// The chunk's positions.
     #[inline(always)]
-    pub(crate) fn of(p: &Particles, chunk: &Chunk) -> Self {
+    pub(crate) fn of(p: &Particles, chunk: &Chunk<F>) -> Self {
         Self {
             x: chunk.x(p),
             moved: F::ZERO,
@@ -268,9 +310,9 @@ impl<F: Lane> Held<F> {
 
     /// Writes the moved lanes' positions back.
     #[inline(always)]
-    pub(crate) fn put(&self, p: &Particles, chunk: &Chunk) {
+    pub(crate) fn put(&self, p: &Particles, chunk: &Chunk<F>) {
         let bits = self.moved.to_bitmask();
-        for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
+        for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
             p.set_x(chunk.at(k), self.x.lane(k));
         }
     }
@@ -286,11 +328,12 @@ pub(crate) struct V3<F: Lane> {
 
 impl<F: Lane> V3<F> {
     #[inline(always)]
-    fn from_lanes(v: [Vec3; LANES]) -> Self {
+    fn from_lanes(v: F::Array<Vec3>) -> Self {
+        let v = v.as_ref();
         Self {
-            x: F::new(each(|k| v[k].x)),
-            y: F::new(each(|k| v[k].y)),
-            z: F::new(each(|k| v[k].z)),
+            x: F::new(F::each(|k| v[k].x)),
+            y: F::new(F::each(|k| v[k].y)),
+            z: F::new(F::each(|k| v[k].z)),
         }
     }
 
@@ -306,26 +349,22 @@ impl<F: Lane> V3<F> {
 
     /// `values[idx[k]]` in each lane `k`.
     #[inline(always)]
-    pub(crate) fn gather(values: &[Vec3], idx: &[u32; LANES]) -> Self {
-        Self::from_lanes(each(|k| values[idx[k] as usize]))
+    pub(crate) fn gather(values: &[Vec3], idx: &F::Array<u32>) -> Self {
+        Self::from_lanes(F::each(|k| values[idx.as_ref()[k] as usize]))
     }
 
     /// Lane `k`'s vector.
     #[inline(always)]
     pub(crate) fn lane(&self, k: usize) -> Vec3 {
-        Vec3::new(
-            self.x.as_array()[k],
-            self.y.as_array()[k],
-            self.z.as_array()[k],
-        )
+        Vec3::new(self.x.at(k), self.y.at(k), self.z.at(k))
     }
 
     /// Sets lane `k`'s vector.
     #[inline(always)]
     pub(crate) fn set_lane(&mut self, k: usize, v: Vec3) {
-        self.x.as_mut_array()[k] = v.x;
-        self.y.as_mut_array()[k] = v.y;
-        self.z.as_mut_array()[k] = v.z;
+        self.x.set(k, v.x);
+        self.y.set(k, v.y);
+        self.z.set(k, v.z);
     }
 
     /// `a` in the lanes of `mask`, `b` elsewhere.
@@ -427,12 +466,7 @@ pub(crate) struct Q4<F: Lane> {
 impl<F: Lane> Q4<F> {
     #[inline(always)]
     fn lane(&self, k: usize) -> Quat {
-        Quat::from_xyzw(
-            self.x.as_array()[k],
-            self.y.as_array()[k],
-            self.z.as_array()[k],
-            self.w.as_array()[k],
-        )
+        Quat::from_xyzw(self.x.at(k), self.y.at(k), self.z.at(k), self.w.at(k))
     }
 
     /// Each lane's normal (as [`normal_of`](crate::solver::cloth::normal_of)).
@@ -543,11 +577,8 @@ pub(crate) fn atan2<F: Lane>(y: F, x: F) -> F {
     let odd = !(right | x.simd_lt(0.0));
     if odd.any() {
         let bits = odd.to_bitmask();
-        let arr = out.as_mut_array();
-        for (k, slot) in arr.iter_mut().enumerate() {
-            if bits & (1 << k) != 0 {
-                *slot = super::atan2(y.as_array()[k], x.as_array()[k]);
-            }
+        for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
+            out.set(k, super::atan2(y.at(k), x.at(k)));
         }
     }
     out
@@ -635,40 +666,42 @@ pub(crate) fn exp_neg<F: Lane>(r: F) -> F {
 
 /// `f(item)` of each of a chunk's constraints, in its lane.
 #[inline(always)]
-pub(crate) fn field<F: Lane, T: Copy>(items: &[T; LANES], f: impl Fn(T) -> f32) -> F {
-    F::new(each(|k| f(items[k])))
+pub(crate) fn field<F: Lane, T: Copy>(items: &F::Array<T>, f: impl Fn(T) -> f32) -> F {
+    F::new(F::each(|k| f(items.as_ref()[k])))
 }
 
 /// `f(m)` of each of a chunk's multipliers, in its lane.
 #[inline(always)]
-pub(crate) fn load_with<F: Lane, M>(mu: &[M; LANES], f: impl Fn(&M) -> f32) -> F {
-    F::new(each(|k| f(&mu[k])))
+pub(crate) fn load_with<F: Lane, M: Copy>(mu: &F::Array<M>, f: impl Fn(&M) -> f32) -> F {
+    F::new(F::each(|k| f(&mu.as_ref()[k])))
 }
 
 /// A chunk's multipliers, one per lane.
 #[inline(always)]
-pub(crate) fn load<F: Lane>(mu: &[f32; LANES]) -> F {
+pub(crate) fn load<F: Lane>(mu: &F::Array<f32>) -> F {
     F::new(*mu)
 }
 
 /// Writes the lanes of `v` back to a chunk's multipliers.
 #[inline(always)]
-pub(crate) fn store<F: Lane>(v: F, mu: &mut [f32; LANES]) {
+pub(crate) fn store<F: Lane>(v: F, mu: &mut F::Array<f32>) {
     *mu = v.to_array();
 }
 
 /// A chunk's pairs of multipliers (a constraint with two parts), as two
 /// lane values.
 #[inline(always)]
-pub(crate) fn load_pairs<F: Lane>(mu: &[[f32; 2]; LANES]) -> [F; 2] {
-    [load_with(mu, |m| m[0]), load_with(mu, |m| m[1])]
+pub(crate) fn load_pairs<F: Lane>(mu: &F::Array<[f32; 2]>) -> [F; 2] {
+    [
+        load_with::<F, _>(mu, |m| m[0]),
+        load_with::<F, _>(mu, |m| m[1]),
+    ]
 }
 
 /// Writes two lane values back to a chunk's pairs of multipliers.
 #[inline(always)]
-pub(crate) fn store_pairs<F: Lane>(v: [F; 2], mu: &mut [[f32; 2]; LANES]) {
-    let (first, second) = (v[0].to_array(), v[1].to_array());
-    *mu = each(|k| [first[k], second[k]]);
+pub(crate) fn store_pairs<F: Lane>(v: [F; 2], mu: &mut F::Array<[f32; 2]>) {
+    *mu = F::each(|k| [v[0].at(k), v[1].at(k)]);
 }
 
 /// `f32::clamp(v, -1, 1)` in every lane (NaN stays NaN).
@@ -693,11 +726,12 @@ mod tests {
         }
     }
 
-    /// The lane functions' results' bits in lane type `L`.
+    /// The lane functions' results' bits in lane type `L`, lane by lane.
     #[cfg(target_arch = "x86_64")]
-    fn lane_bits<L: Lane>(t: [f32; LANES], y: [f32; LANES], x: [f32; LANES]) -> Vec<u32> {
+    fn lane_bits<L: Lane>(t: &[f32], y: &[f32], x: &[f32]) -> Vec<[u32; 10]> {
         let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
-        let (t, y, x) = (L::new(t), L::new(y), L::new(x));
+        let lanes = |v: &[f32]| L::new(*L::chunk(v));
+        let (t, y, x) = (lanes(t), lanes(y), lanes(x));
         let q = Q4 {
             x: y,
             y: x,
@@ -710,7 +744,7 @@ mod tests {
             z: x * L::splat(0.01),
         };
         let (turned, series) = turn_by(q, r);
-        [
+        let results = [
             atan(t),
             atan2(y, x),
             scale(&rot, t.abs(), x.abs()),
@@ -727,10 +761,10 @@ mod tests {
             turned.w,
             series,
             q.normal().z,
-        ]
-        .iter()
-        .flat_map(|v| v.to_array().map(f32::to_bits))
-        .collect()
+        ];
+        (0..L::N)
+            .map(|k| results.map(|v| v.at(k).to_bits()))
+            .collect()
     }
 
     #[test]
@@ -741,11 +775,51 @@ mod tests {
         }
         for i in 0..2000 {
             let t0 = (i as f32 - 1000.0) * 0.0037 + 1e-4;
-            let t = each(|k| t0 * [1.0, -1.0, 0.01, 40.0][k % 4] + k as f32 * 1e-3);
-            let y = each(|k| [t0, t0, -t0, 0.3, f32::NAN, -0.0, 1e-30, t0][k]);
-            let x = each(|k| [1.0, -0.5, 0.0, t0, 2.0, -1.0, t0 * 3.0, -0.0][k]);
-            assert_eq!(lane_bits::<Sse>(t, y, x), lane_bits::<Avx>(t, y, x), "{t0}");
+            let t: [f32; WIDE_LANES] =
+                std::array::from_fn(|k| t0 * [1.0, -1.0, 0.01, 40.0][k % 4] + k as f32 * 1e-3);
+            let y: [f32; WIDE_LANES] =
+                std::array::from_fn(|k| [t0, t0, -t0, 0.3, f32::NAN, -0.0, 1e-30, t0][k % 8]);
+            let x: [f32; WIDE_LANES] = std::array::from_fn(|k| {
+                [1.0, -0.5, 0.0, t0, 2.0, -1.0, t0 * 3.0, -0.0][(k + k / 8) % 8]
+            });
+            // Sixteen lanes are eight and eight.
+            let (lo, hi) = (0..LANES, LANES..WIDE_LANES);
+            let mut sse = lane_bits::<Sse>(&t[lo.clone()], &y[lo.clone()], &x[lo.clone()]);
+            sse.extend(lane_bits::<Sse>(
+                &t[hi.clone()],
+                &y[hi.clone()],
+                &x[hi.clone()],
+            ));
+            let mut avx = lane_bits::<Avx>(&t[lo.clone()], &y[lo.clone()], &x[lo]);
+            avx.extend(lane_bits::<Avx>(&t[hi.clone()], &y[hi.clone()], &x[hi]));
+            assert_eq!(sse, avx, "{t0}");
+            assert_eq!(sse, lane_bits::<Avx16>(&t, &y, &x), "{t0}");
         }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn sixteen_lanes_mask_and_count_like_eight() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        for n in 0..=WIDE_LANES {
+            let mask = live::<Avx16>(n);
+            assert_eq!(mask.to_bitmask(), (1u32 << n) - 1, "{n} live");
+            assert_eq!(mask.any(), n > 0);
+            assert_eq!(mask.none(), n == 0);
+            assert_eq!(mask.all(), n == WIDE_LANES);
+        }
+        let mut v = Avx16::splat(1.0);
+        v.set(11, -2.0);
+        assert_eq!(v.at(11), -2.0);
+        assert_eq!(
+            v.abs().to_array(),
+            [
+                1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0
+            ]
+        );
+        assert_eq!(v.simd_lt(0.0).to_bitmask(), 1 << 11);
     }
 
     #[test]

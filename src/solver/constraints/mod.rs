@@ -51,7 +51,9 @@ use super::cloth::turn_by;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
 use super::team::Crew;
+#[cfg(doc)]
 use lanes::LANES;
+use lanes::{Array, Avx, Avx16, Lane, Sse, WIDE_LANES};
 
 /// A slice that the threads of a parallel region write element by element.
 ///
@@ -229,25 +231,41 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
     (-c - alpha_t * mu) / (w + alpha_t)
 }
 
-/// A kernel in both lane types: the same projection of a chunk of
+/// A kernel in every lane type: the same projection of a chunk of
 /// constraints (their items, their multipliers, how many are live, the
-/// recorder), once with [`lanes::Sse`] and once with [`lanes::Avx`] for
-/// [`project_range`]'s AVX2 copy. Made by [`kernel!`], which writes the
-/// closure once.
-pub(crate) struct Kernel<S, A> {
+/// recorder), once with [`lanes::Sse`], and with [`lanes::Avx`] and
+/// [`lanes::Avx16`] for [`project_range`]'s AVX2 copy. Made by [`kernel!`],
+/// which writes the closure once.
+pub(crate) struct Kernel<S, A, W> {
     sse: S,
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     avx: A,
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    avx16: W,
 }
 
-impl<S, A> Kernel<S, A> {
-    /// The kernel `sse` in [`lanes::Sse`] and `avx` in [`lanes::Avx`].
-    pub(crate) fn new<T, M, R>(sse: S, avx: A) -> Self
+/// A kernel's signature in lane type `L`: a chunk of items, their
+/// multipliers, how many are live, the recorder.
+pub(crate) trait Project<L: Lane, T: Copy, M: Copy, R>:
+    Fn(&Array<L, T>, &mut Array<L, M>, usize, &mut R)
+{
+}
+
+impl<L: Lane, T: Copy, M: Copy, R, P> Project<L, T, M, R> for P where
+    P: Fn(&Array<L, T>, &mut Array<L, M>, usize, &mut R)
+{
+}
+
+impl<S, A, W> Kernel<S, A, W> {
+    /// The kernel `sse` in [`lanes::Sse`], `avx` in [`lanes::Avx`] and
+    /// `avx16` in [`lanes::Avx16`].
+    pub(crate) fn new<T: Copy, M: Copy, R>(sse: S, avx: A, avx16: W) -> Self
     where
-        S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-        A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+        S: Fn(&Array<Sse, T>, &mut Array<Sse, M>, usize, &mut R),
+        A: Fn(&Array<Avx, T>, &mut Array<Avx, M>, usize, &mut R),
+        W: Fn(&Array<Avx16, T>, &mut Array<Avx16, M>, usize, &mut R),
     {
-        Self { sse, avx }
+        Self { sse, avx, avx16 }
     }
 }
 
@@ -276,6 +294,12 @@ macro_rules! kernel {
                 type F = $crate::solver::constraints::lanes::Avx;
                 $body
             },
+            #[inline(always)]
+            |$c, $m, $n, $r| {
+                #[allow(dead_code)]
+                type F = $crate::solver::constraints::lanes::Avx16;
+                $body
+            },
         )
     };
 }
@@ -288,27 +312,28 @@ pub(crate) use kernel;
 /// shared particles), and a constraint's projection does not depend on the
 /// thread or the lane it runs in, so the result is bit-identical for any
 /// number of threads and any split. The kernel is handed the share
-/// in chunks of up to [`LANES`] constraints with their multipliers, for the
-/// kernels that project a chunk side by side ([`lanes`]), in the lane type
-/// of the copy that [`project_range`] picks.
+/// in chunks of constraints with their multipliers, for the kernels that
+/// project a chunk side by side ([`lanes`]), in the lane type of the copy
+/// that [`project_range`] picks.
 ///
 /// A run of small batches (a heap of contacts ends in dozens of colours of
 /// a few constraints each) is projected by thread 0 alone, batch after
 /// batch, with one barrier at its end: the same projections in the same
 /// order, without a barrier per batch that costs more than sharing saves.
-pub(crate) fn project_batches<T, M, R, S, A>(
+pub(crate) fn project_batches<T, M, R, S, A, W>(
     crew: &Crew,
     items: &[T],
     mu: &Shared<M>,
     batches: &[Range<usize>],
     rec: &mut R,
-    kernel: Kernel<S, A>,
+    kernel: Kernel<S, A, W>,
 ) where
     T: Copy,
     M: Copy,
     R: Recorder,
-    S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-    A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    S: Project<Sse, T, M, R>,
+    A: Project<Avx, T, M, R>,
+    W: Project<Avx16, T, M, R>,
 {
     assert_eq!(items.len(), mu.len());
     let small = |b: &Range<usize>| b.len() < SOLO_BATCH;
@@ -324,14 +349,14 @@ pub(crate) fn project_batches<T, M, R, S, A>(
         if run > 1 {
             if crew.index() == 0 {
                 for b in now {
-                    project_range(items, mu, b.clone(), rec, &kernel);
+                    project_range(items, mu, b.clone(), rec, &kernel, Width::Narrow);
                 }
             }
         } else {
             let block = claim_block(first.len(), crew.size());
             while let Some(mine) = crew.claim(first.len(), block) {
                 let share = first.start + mine.start..first.start + mine.end;
-                project_range(items, mu, share, rec, &kernel);
+                project_range(items, mu, share, rec, &kernel, Width::Wide);
             }
         }
         crew.barrier();
@@ -339,19 +364,31 @@ pub(crate) fn project_batches<T, M, R, S, A>(
 }
 
 /// Batches under this many constraints, one after another, are projected
-/// by one thread ([`project_batches`]).
+/// by one thread ([`project_batches`]), in chunks of [`LANES`]; longer ones
+/// are shared, in chunks of [`WIDE_LANES`] where the processor has AVX2.
 const SOLO_BATCH: usize = 256;
+
+/// The chunks [`project_range`] takes: [`LANES`] constraints, or
+/// [`WIDE_LANES`] in the AVX2 copy (a long batch's share; its remainder in
+/// chunks of [`LANES`]). Sixteen lanes are 3–4 % faster steps on the big
+/// sheets and slower on a small cloth, whose batches are short
+/// (BENCHMARKS.md, "sixteen lanes for long batches").
+#[derive(Clone, Copy, PartialEq)]
+enum Width {
+    Narrow,
+    Wide,
+}
 
 /// The blocks a crew of `size` claims a batch of `len` constraints in
 /// ([`Crew::claim`]): about four a thread, so that a thread that meets cheap
 /// constraints (small angles: no steep arctangent, no cut by Eq. 3) takes
-/// more of them, in whole chunks of [`LANES`]; and at most [`MAX_BLOCK`],
+/// more of them, in whole chunks of [`WIDE_LANES`]; and at most [`MAX_BLOCK`],
 /// so that the thread that takes a big batch's last block does not keep the
 /// other waiting for long (a 256 × 256 sheet's batches are 32 768 edges).
 fn claim_block(len: usize, size: usize) -> usize {
     len.div_ceil(4 * size)
         .min(MAX_BLOCK)
-        .next_multiple_of(LANES)
+        .next_multiple_of(WIDE_LANES)
 }
 
 /// The largest block [`claim_block`] hands out: 3 % faster steps at
@@ -359,50 +396,61 @@ fn claim_block(len: usize, size: usize) -> usize {
 /// 64 × 64 and 128 × 128 (BENCHMARKS.md, the Intel machine of 2026-11-25).
 const MAX_BLOCK: usize = 512;
 
-/// Projects `items[range]` in chunks of [`LANES`] ([`project_batches`]),
-/// in AVX registers where the processor has AVX2 ([`avx2`]): the chunk
-/// loop, with the kernel inlined into it, is compiled twice, once for any
-/// processor with [`lanes::Sse`] and once for AVX2 with [`lanes::Avx`].
+/// Projects `items[range]` chunk by chunk ([`project_batches`]), in AVX
+/// registers where the processor has AVX2 ([`avx2`]): the chunk loop, with
+/// the kernel inlined into it, is compiled twice, once for any processor
+/// with [`lanes::Sse`] and once for AVX2 with [`lanes::Avx`], and, for a
+/// [`Width::Wide`] range, [`lanes::Avx16`] first.
 #[inline(always)]
-fn project_range<T, M, R, S, A>(
+fn project_range<T, M, R, S, A, W>(
     items: &[T],
     mu: &Shared<M>,
     range: Range<usize>,
     rec: &mut R,
-    kernel: &Kernel<S, A>,
+    kernel: &Kernel<S, A, W>,
+    width: Width,
 ) where
     T: Copy,
     M: Copy,
     R: Recorder,
-    S: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-    A: Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    S: Project<Sse, T, M, R>,
+    A: Project<Avx, T, M, R>,
+    W: Project<Avx16, T, M, R>,
 {
     #[cfg(target_arch = "x86_64")]
     if avx2() {
         // SAFETY: the processor has AVX2.
-        return unsafe { project_range_avx2(items, mu, range, rec, &kernel.avx) };
+        return unsafe { project_range_avx2(items, mu, range, rec, kernel, width) };
     }
-    project_chunks(items, mu, range, rec, &kernel.sse)
+    let _ = width;
+    project_chunks::<Sse, _, _, _>(items, mu, range, rec, &kernel.sse)
 }
 
-/// [`project_chunks`] compiled for AVX2.
+/// [`project_range`]'s chunk loops compiled for AVX2: a wide range in
+/// chunks of [`WIDE_LANES`] and the rest in chunks of [`LANES`].
 ///
 /// # Safety
 /// The processor must have AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn project_range_avx2<T, M, R>(
+unsafe fn project_range_avx2<T, M, R, S, A, W>(
     items: &[T],
     mu: &Shared<M>,
-    range: Range<usize>,
+    mut range: Range<usize>,
     rec: &mut R,
-    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
+    kernel: &Kernel<S, A, W>,
+    width: Width,
 ) where
     T: Copy,
     M: Copy,
     R: Recorder,
+    A: Project<Avx, T, M, R>,
+    W: Project<Avx16, T, M, R>,
 {
-    project_chunks(items, mu, range, rec, project)
+    if width == Width::Wide {
+        range.start = project_whole::<Avx16, _, _, _>(items, mu, range.clone(), rec, &kernel.avx16);
+    }
+    project_chunks::<Avx, _, _, _>(items, mu, range, rec, &kernel.avx)
 }
 
 /// Whether the kernels run in AVX registers: the processor has AVX2, and
@@ -417,44 +465,53 @@ fn avx2() -> bool {
     })
 }
 
-/// Projects `items[range]` in chunks of [`LANES`] with `project`; inlined
-/// into each copy of [`project_range`].
+/// Projects `items[range]` in chunks of `L::N` with `project`, the last one
+/// padded; inlined into each copy of [`project_range`].
 #[inline(always)]
-fn project_chunks<T, M, R>(
+fn project_chunks<L: Lane, T: Copy, M: Copy, R: Recorder>(
     items: &[T],
     mu: &Shared<M>,
     range: Range<usize>,
     rec: &mut R,
-    project: &impl Fn(&[T; LANES], &mut [M; LANES], usize, &mut R),
-) where
-    T: Copy,
-    M: Copy,
-    R: Recorder,
-{
-    if range.is_empty() {
+    project: &impl Project<L, T, M, R>,
+) {
+    let tail = project_whole::<L, _, _, _>(items, mu, range.clone(), rec, project)..range.end;
+    if tail.is_empty() {
         return;
-    }
-    // SAFETY: within `mu` (same length as `items`, checked); shares are
-    // disjoint, so these multipliers are this thread's until the barrier.
-    let mus = unsafe { mu.slice(range.clone()) };
-    let mut chunks = items[range].chunks_exact(LANES);
-    let mut mu_chunks = mus.chunks_exact_mut(LANES);
-    for (chunk, m) in (&mut chunks).zip(&mut mu_chunks) {
-        let (chunk, m) = (
-            chunk.try_into().expect("exact"),
-            m.try_into().expect("exact"),
-        );
-        project(chunk, m, LANES, rec);
     }
     // The tail, padded with copies of its first constraint, which the
     // kernels compute but never write.
-    let (tail, mu_tail) = (chunks.remainder(), mu_chunks.into_remainder());
-    if let (Some(&first), Some(&first_mu)) = (tail.first(), mu_tail.first()) {
-        let chunk = lanes::each(|k| tail.get(k).copied().unwrap_or(first));
-        let mut m = lanes::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
-        project(&chunk, &mut m, tail.len(), rec);
-        mu_tail.copy_from_slice(&m[..tail.len()]);
+    // SAFETY: as in `project_whole`.
+    let mu_tail = unsafe { mu.slice(tail.clone()) };
+    let (tail, first, first_mu) = (&items[tail.clone()], items[tail.start], mu_tail[0]);
+    let chunk = L::each(|k| tail.get(k).copied().unwrap_or(first));
+    let mut m = L::each(|k| mu_tail.get(k).copied().unwrap_or(first_mu));
+    project(&chunk, &mut m, tail.len(), rec);
+    mu_tail.copy_from_slice(&m.as_ref()[..tail.len()]);
+}
+
+/// Projects the whole chunks of `L::N` at the start of `items[range]` with
+/// `project`, and returns where the rest starts.
+#[inline(always)]
+fn project_whole<L: Lane, T: Copy, M: Copy, R: Recorder>(
+    items: &[T],
+    mu: &Shared<M>,
+    range: Range<usize>,
+    rec: &mut R,
+    project: &impl Project<L, T, M, R>,
+) -> usize {
+    let end = range.start + range.len() / L::N * L::N;
+    if end == range.start {
+        return end;
     }
+    // SAFETY: within `mu` (same length as `items`, checked); shares are
+    // disjoint, so these multipliers are this thread's until the barrier.
+    let mus = unsafe { mu.slice(range.start..end) };
+    let chunks = items[range.start..end].chunks_exact(L::N);
+    for (chunk, m) in chunks.zip(mus.chunks_exact_mut(L::N)) {
+        project(L::chunk(chunk), L::chunk_mut(m), L::N, rec);
+    }
+    end
 }
 
 /// Turns particle `i` by the rotation vector `omega` (axis × angle), which

@@ -18,31 +18,34 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, LANES, Lane};
+use super::lanes::{self, Chunk, Lane};
 use super::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
-/// Projects the normals of up to [`LANES`](lanes::LANES) edges of one
+/// Projects the normals of up to `F::N` edges of one
 /// colour toward each other, side by side, with compliance `alpha_t`
 /// (`α / Δt²`, for a square cell).
 #[inline(always)]
 pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
-    pairs: &[Pair; LANES],
-    mu: &mut [f32; LANES],
+    pairs: &F::Array<Pair>,
+    mu: &mut F::Array<f32>,
     live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (ba, bb) = (a.inv_inertia::<F>(p), b.inv_inertia::<F>(p));
+    let (a, b) = (
+        Chunk::<F>::of(pairs, |c| c.a),
+        Chunk::<F>::of(pairs, |c| c.b),
+    );
+    let (ba, bb) = (a.inv_inertia(p), b.inv_inertia(p));
     let w = ba + bb;
     let mut on = lanes::live::<F>(live) & !w.simd_le(0.0);
     if on.none() {
         return;
     }
-    let (qa, qb) = (a.q::<F>(p), b.q::<F>(p));
+    let (qa, qb) = (a.q(p), b.q(p));
     let (na, nb) = (qa.normal(), qb.normal());
     // `axis_angle`, lane by lane: the regular case in lanes, the rest alone.
     let axis = na.cross(nb);
@@ -52,22 +55,22 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     let odd = on & !sin.simd_gt(1e-9);
     if odd.any() {
         let bits = odd.to_bitmask();
-        for k in (0..LANES).filter(|k| bits & (1 << k) != 0) {
+        for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
             let edge = p.x(b.at(k)) - p.x(a.at(k));
             match axis_angle(na.lane(k), nb.lane(k), edge) {
                 Some((ax, an)) => {
                     axis.set_lane(k, ax);
-                    angle.as_mut_array()[k] = an;
+                    angle.set(k, an);
                 }
-                None => on.as_mut_array()[k] = 0.0,
+                None => on.set(k, 0.0),
             }
         }
     }
-    let mut m = lanes::load(mu);
+    let mut m = lanes::load::<F>(mu);
     let d = lanes::delta_mu(
         angle,
         w,
-        F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect),
+        F::splat(alpha_t) / lanes::field::<F, _>(pairs, |c| c.aspect),
         m,
     );
     // Gradients: −axis at a, +axis at b; the larger turn is Eq. 3's to shape.

@@ -19,25 +19,28 @@ use glam::Vec3;
 
 use super::Particles;
 use super::Recorder;
-use super::lanes::{self, Chunk, LANES, Lane};
+use super::lanes::{self, Chunk, Lane};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
-/// Projects up to [`LANES`](lanes::LANES) edges of one colour side by side,
+/// Projects up to `F::N` edges of one colour side by side,
 /// each from both ends, with compliance `alpha_t` (`α / Δt²`, for a square
 /// cell); `mu` holds each edge's two sides' multipliers.
 #[inline(always)]
 pub(crate) fn project<F: Lane, R: Recorder>(
     p: &Particles,
-    pairs: &[Pair; LANES],
-    mu: &mut [[f32; 2]; LANES],
+    pairs: &F::Array<Pair>,
+    mu: &mut F::Array<[f32; 2]>,
     live: usize,
     alpha_t: f32,
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
-    let mut m = lanes::load_pairs(mu);
+    let (a, b) = (
+        Chunk::<F>::of(pairs, |c| c.a),
+        Chunk::<F>::of(pairs, |c| c.b),
+    );
+    let alpha_t = F::splat(alpha_t) / lanes::field::<F, _>(pairs, |c| c.aspect);
+    let mut m = lanes::load_pairs::<F>(mu);
     let live = lanes::live::<F>(live);
     // Both sides move both ends: the positions stay in lanes between them
     // and are written once.
@@ -52,7 +55,7 @@ pub(crate) fn project<F: Lane, R: Recorder>(
 /// One end of a chunk's edges: its particles, positions (held in lanes),
 /// inverse masses and inverse inertias.
 struct End<'c, F: Lane> {
-    chunk: &'c Chunk,
+    chunk: &'c Chunk<F>,
     pos: lanes::Held<F>,
     w: F,
     beta: F,
@@ -60,12 +63,12 @@ struct End<'c, F: Lane> {
 
 impl<'c, F: Lane> End<'c, F> {
     #[inline(always)]
-    fn of(p: &Particles, chunk: &'c Chunk) -> Self {
+    fn of(p: &Particles, chunk: &'c Chunk<F>) -> Self {
         Self {
             chunk,
             pos: lanes::Held::of(p, chunk),
-            w: chunk.inv_mass::<F>(p),
-            beta: chunk.inv_inertia::<F>(p),
+            w: chunk.inv_mass(p),
+            beta: chunk.inv_inertia(p),
         }
     }
 }
@@ -115,7 +118,7 @@ fn one_side<F: Lane, R: Recorder>(
     rot: &ForcedRotation,
     rec: &mut R,
 ) {
-    let q = e.chunk.q::<F>(p);
+    let q = e.chunk.q(p);
     let n = q.normal();
     let s = o.pos.x - e.pos.x;
     let len = s.length();

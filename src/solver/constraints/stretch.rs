@@ -21,32 +21,35 @@
 use glam::Vec3;
 
 use super::Particles;
-use super::lanes::{self, Chunk, LANES, Lane};
+use super::lanes::{self, Chunk, Lane};
 use crate::solver::topology::Pair;
 
-/// Projects up to [`LANES`](lanes::LANES) distance constraints of one colour
+/// Projects up to `F::N` distance constraints of one colour
 /// side by side, with compliance `alpha_t` (`α / Δt²` for a square cell;
 /// divided by each pair's aspect).
 #[inline(always)]
 pub(crate) fn project<F: Lane>(
     p: &Particles,
-    pairs: &[Pair; LANES],
-    mu: &mut [f32; LANES],
+    pairs: &F::Array<Pair>,
+    mu: &mut F::Array<f32>,
     live: usize,
     alpha_t: f32,
 ) {
-    let (a, b) = (Chunk::of(pairs, |c| c.a), Chunk::of(pairs, |c| c.b));
-    let (wa, wb) = (a.inv_mass::<F>(p), b.inv_mass::<F>(p));
+    let (a, b) = (
+        Chunk::<F>::of(pairs, |c| c.a),
+        Chunk::<F>::of(pairs, |c| c.b),
+    );
+    let (wa, wb) = (a.inv_mass(p), b.inv_mass(p));
     let w = wa + wb;
-    let s = b.x::<F>(p) - a.x::<F>(p);
+    let s = b.x(p) - a.x(p);
     let len = s.length();
     let on = lanes::live::<F>(live) & !w.simd_eq(0.0) & !len.simd_le(1e-9);
     if on.none() {
         return;
     }
-    let rest = lanes::field(pairs, |c| c.rest);
-    let alpha_t = F::splat(alpha_t) / lanes::field(pairs, |c| c.aspect);
-    let m = lanes::load(mu);
+    let rest = lanes::field::<F, _>(pairs, |c| c.rest);
+    let alpha_t = F::splat(alpha_t) / lanes::field::<F, _>(pairs, |c| c.aspect);
+    let m = lanes::load::<F>(mu);
     let d = lanes::delta_mu(len - rest, w, alpha_t, m);
     lanes::store(on.select(m + d, m), mu);
     let dir = s * (d * (F::ONE / len));
@@ -68,30 +71,30 @@ pub struct Tether {
     pub span: f32,
 }
 
-/// Projects up to [`LANES`](lanes::LANES) tethers of one batch side by
+/// Projects up to `F::N` tethers of one batch side by
 /// side: pulls each particle back if it is too far.
 #[inline(always)]
 pub(crate) fn project_tethers<F: Lane>(
     p: &Particles,
-    tethers: &[Tether; LANES],
-    mu: &mut [f32; LANES],
+    tethers: &F::Array<Tether>,
+    mu: &mut F::Array<f32>,
     live: usize,
     alpha_t: f32,
 ) {
     let (i, anchor) = (
-        Chunk::of(tethers, |t| t.particle),
-        Chunk::of(tethers, |t| t.anchor),
+        Chunk::<F>::of(tethers, |t| t.particle),
+        Chunk::<F>::of(tethers, |t| t.anchor),
     );
-    let s = i.x::<F>(p) - anchor.x::<F>(p);
+    let s = i.x(p) - anchor.x(p);
     let len = s.length();
     let on = lanes::live::<F>(live) & !len.simd_le(1e-9);
     if on.none() {
         return;
     }
-    let w = i.inv_mass::<F>(p);
-    let rest = lanes::field(tethers, |t| t.rest);
-    let alpha_t = F::splat(alpha_t) * lanes::field(tethers, |t| t.span);
-    let m = lanes::load(mu);
+    let w = i.inv_mass(p);
+    let rest = lanes::field::<F, _>(tethers, |t| t.rest);
+    let alpha_t = F::splat(alpha_t) * lanes::field::<F, _>(tethers, |t| t.span);
+    let m = lanes::load::<F>(mu);
     // One-sided: the multiplier may only pull (μ ≤ 0).
     let next = (m + lanes::delta_mu(len - rest, w, alpha_t, m)).min(F::ZERO);
     let d = next - m;
