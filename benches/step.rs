@@ -215,6 +215,7 @@ fn telemetry(c: &mut Criterion) {
             let (rec, _storage) = match sink {
                 "file" => (
                     rerun::RecordingStreamBuilder::new("weft-bench")
+                        .batcher_config(weft::telemetry::file_batching().unwrap())
                         .save(dir.path().join(format!("{level}.rrd")))
                         .unwrap(),
                     None,

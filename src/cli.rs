@@ -10,7 +10,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::record::{Run, table, verdict};
 use crate::scene::{Override, Scene, load, shipped};
-use crate::telemetry::{Telemetry, blueprint};
+use crate::telemetry::{self, Telemetry, blueprint};
 
 /// weft: oriented-particle cloth simulator and live-telemetry debugger.
 #[derive(Debug, Parser)]
@@ -327,6 +327,7 @@ fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
         rerun::RecordingStreamBuilder::new("weft").with_default_blueprint(blueprint::default());
     if let Some(path) = &args.save {
         return builder
+            .batcher_config(telemetry::file_batching()?)
             .save(path)
             .map_err(|e| anyhow::anyhow!("cannot write the recording to {}: {e}", path.display()));
     }
@@ -337,6 +338,7 @@ fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
     }
     if args.stdout {
         return builder
+            .batcher_config(telemetry::file_batching()?)
             .stdout()
             .context("streaming the recording to standard output");
     }

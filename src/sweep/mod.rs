@@ -37,7 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::record::{Check, Figures, Run, verdict};
 use crate::scene::{Loaded, Override, Scene, load};
-use crate::telemetry::{Telemetry, blueprint};
+use crate::telemetry::{self, Telemetry, blueprint};
 use grid::{Axis, Point};
 use shard::Shard;
 
@@ -345,8 +345,10 @@ pub fn run_point(
     let part = part_path(&rrd);
     let scene = Scene::new(&loaded.preset).map_err(|e| format!("{}: {e}", point.name))?;
     let frames = plan.frames_of(loaded, &scene);
+    let batching = telemetry::file_batching().map_err(|e| e.to_string())?;
     let stream = rerun::RecordingStreamBuilder::new("weft")
         .with_default_blueprint(blueprint::default())
+        .batcher_config(batching)
         .save(&part)
         .map_err(|e| format!("cannot write {}: {e}", part.display()))?;
     let telemetry = Telemetry::new(stream.clone(), loaded.preset.telemetry);
