@@ -370,9 +370,9 @@ const SOLO_BATCH: usize = 256;
 
 /// The chunks [`project_range`] takes: [`LANES`] constraints, or
 /// [`WIDE_LANES`] in the AVX2 copy (a long batch's share; its remainder in
-/// chunks of [`LANES`]). Sixteen lanes are 3–4 % faster steps on the big
+/// chunks of [`LANES`]). Sixteen lanes are 5–10 % faster steps on the big
 /// sheets and slower on a small cloth, whose batches are short
-/// (BENCHMARKS.md, "sixteen lanes for long batches").
+/// (BENCHMARKS.md, "Sixteen lanes in two AVX registers").
 #[derive(Clone, Copy, PartialEq)]
 enum Width {
     Narrow,
