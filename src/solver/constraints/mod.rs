@@ -422,7 +422,7 @@ fn project_range<T, M, R, S, A, W>(
         // SAFETY: the processor has AVX2.
         return unsafe { project_range_avx2(items, mu, range, rec, kernel, width) };
     }
-    let _ = width;
+    let _ = width; // The portable copy has eight lanes only.
     project_chunks::<Sse, _, _, _>(items, mu, range, rec, &kernel.sse)
 }
 
