@@ -3,13 +3,13 @@
 //! viewer, and a regression gate for CI.
 //!
 //! Any `.rrd` weft wrote works: `weft record`, `weft sweep`, and the desktop
-//! debugger's session files. Each is read back with [`telemetry::read`]
+//! debugger's session files. Each is read back with [`telemetry::read`](crate::telemetry::read)
 //! (Rerun's decoder) into a [`RunData`]:
 //!
 //! - the **preset diff** flattens each stored preset (with every default
 //!   filled in) into dotted keys and lists the keys whose values differ;
 //! - the **tuning changes** are the stored parameter sets after the first,
-//!   described with [`describe_changes`](crate::telemetry::describe_changes);
+//!   described with [`crate::telemetry::describe_changes`];
 //! - the **figures** come from the stored summary; a recording cut short has
 //!   none, and its figures are rebuilt from the metrics it holds;
 //! - when two runs share everything but their tuning (solver parameters,

@@ -1,6 +1,6 @@
 //! The adjust phase of one substep (§3.3–3.4): `iterations` sweeps over the
 //! constraint families in [`SWEEP`] order, each sweep followed by the
-//! colliders, all in one parallel region ([`team`](super::team)).
+//! colliders, all in one parallel region ([`super::team`]).
 //!
 //! Every thread of the crew walks the same sequence: for each family, each
 //! of its constraint sets, each colour batch, it projects the blocks of the

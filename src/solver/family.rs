@@ -4,13 +4,13 @@
 //! own weight `λ`, violation measure, corrections and timing. [`Family`]
 //! lists them; [`PerFamily`] holds one value per family (weights, bounds,
 //! toggles, diagnostics), indexed by [`Family`] and read and written in
-//! presets as a table keyed by [`Family::name`]. [`Sweep::project`] says which
+//! presets as a table keyed by [`Family::name`]. `Sweep::project` says which
 //! constraint sets each family projects, and [`violation`] how each is
 //! measured.
 //!
 //! Adding a family: its kernel in `constraints/<family>.rs`, a variant here
 //! (with its name, weight key and default weight), its arm in
-//! [`Sweep::project`] and [`violation`], and its colour in the telemetry.
+//! `Sweep::project` and [`violation`], and its colour in the telemetry.
 //! Everything else (presets, validation, telemetry paths, the panel's
 //! sliders and toggles, `[expect]` bounds, figures) iterates [`Family::ALL`].
 

@@ -1,7 +1,7 @@
 //! Telemetry: what a running scene streams to Rerun.
 //!
 //! The solver knows nothing of Rerun; this module reads the scene and the
-//! solver's [`Diagnostics`](crate::solver::Diagnostics) and logs them, in a
+//! solver's [`Diagnostics`] and logs them, in a
 //! few batched entities per frame (never one entity per particle). Entity
 //! paths ([`paths`]):
 //!

@@ -7,9 +7,9 @@
 //! frame 180`) and recording properties (`weft`: version, preset, run,
 //! changes, parent and frame of a branch; `result`, when the run ends: frames,
 //! final-state digest, verdict). Earlier runs stay in the viewer's recording
-//! list. The thread owns the current [`Run`] (scene + telemetry) and its
-//! [`History`] (checkpoints, to branch from any frame). Telemetry goes
-//! through a [`Tee`]: always to the viewer (or wherever the caller forwards
+//! list. The thread owns the current [`Run`](crate::record::Run) (scene + telemetry) and its
+//! [`History`](crate::app::history::History) (checkpoints, to branch from any frame). Telemetry goes
+//! through a `Tee` (`runs.rs`): always to the viewer (or wherever the caller forwards
 //! it), and to an `.rrd` file when the run is being recorded, so the file
 //! gets exactly one run, from its first message. A change of parameters
 //! applies at the next step and is logged at the frame it takes effect.

@@ -3,13 +3,13 @@
 //!
 //! Every way in (a file or shipped name, `--set` on a loaded preset, the
 //! text stored in a recording) runs one pipeline over plain TOML tables:
-//! 1. [`source`]: read the file and, recursively, the preset it `extend`s;
+//! 1. `source`: read the file and, recursively, the preset it `extend`s;
 //!    deep-merge the chain, the extending file winning (arrays are replaced
 //!    whole);
-//! 2. [`overrides`]: apply `--set key.path=value` overrides;
+//! 2. `overrides`: apply `--set key.path=value` overrides;
 //! 3. deserialise into [`Preset`] (unknown keys are errors) and validate.
 //!
-//! Every failure carries the dotted key it is about; [`locate`] finds that
+//! Every failure carries the dotted key it is about; `locate` finds that
 //! key in the sources (the `--set` that caused it, else the file that
 //! writes it) to report file, line and column, and suggests the nearest
 //! valid key for a typo.

@@ -328,7 +328,7 @@ pub fn clip(name: &str) -> Cow<'_, str> {
 }
 
 /// The candidate closest to `word` by edit distance, if close enough. Names
-/// longer than [`MAX_COMPARED`] characters are not compared.
+/// longer than `MAX_COMPARED` characters are not compared.
 pub fn nearest<'a>(word: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
     let chars = |s: &str| {
         if s.len() > 4 * MAX_COMPARED {

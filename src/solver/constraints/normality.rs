@@ -9,7 +9,7 @@
 //!
 //! The paper pairs normality with shear ("normality & shear"), and so does
 //! weft: the same weight sets the stiffness of the cell diagonals, soft
-//! distance constraints ([`super::stretch::project`]) that let the weave
+//! distance constraints (`stretch::project`) that let the weave
 //! shear the way cloth does instead of holding it square like a board.
 //!
 //! Two normals pointing exactly apart have `n_a × n_b = 0`, which would make

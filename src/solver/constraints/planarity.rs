@@ -4,7 +4,7 @@
 //! the gradients of the co-planarity violation `n_a · s` (the distance of `b`
 //! from `a`'s tangent plane): moving `b` along `n_a`, `a` against it, and
 //! turning `a` about `v = n_a × s` all reduce it. weft projects the same
-//! condition as an angle (see [`one_side`]) so that it stays well posed for
+//! condition as an angle (see `one_side`) so that it stays well posed for
 //! large violations. Each edge is projected from both ends, `b` into `a`'s
 //! plane and `a` into `b`'s. The violation reported is that angle, in
 //! radians (the larger of the two ends).

@@ -63,7 +63,7 @@ pub struct SelfContact {
     /// substep's start (along its normal `(x_b − x_a) × (x_c − x_a)`).
     pub side: f32,
     /// Which of the triangle's edges lie on the cloth's border: bit `k` for
-    /// the edge opposite corner `k` ([`rim`]).
+    /// the edge opposite corner `k` (used by `least`).
     pub rim: u8,
 }
 
