@@ -24,7 +24,7 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitAnd, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
 
-use super::lanes::{LANES, Lane, WIDE_LANES, each};
+use super::lanes::{LANES, Lane, WIDE_LANES, chunks_of, each};
 
 /// Eight `f32`s in one AVX register.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +37,35 @@ impl F8 {
         // SAFETY: the same size, and any bits are a valid `__m256`.
         unsafe { std::mem::transmute(v) }
     }
+}
+
+/// `Lane`'s conversions to and from `[f32; $n]` for a register type that
+/// is exactly `$n` `f32`s: `F8` (`repr(transparent)` over `__m256`) and
+/// `F16` (`repr(C)` over two `F8`, no padding). Any bits are valid both as
+/// `f32`s and as registers.
+macro_rules! as_floats {
+    ($n:expr) => {
+        #[inline(always)]
+        fn new(v: [f32; $n]) -> Self {
+            // SAFETY: the same size; see the macro's docs.
+            unsafe { std::mem::transmute(v) }
+        }
+        #[inline(always)]
+        fn to_array(self) -> [f32; $n] {
+            // SAFETY: as `new`.
+            unsafe { std::mem::transmute(self) }
+        }
+        #[inline(always)]
+        fn as_array(&self) -> &[f32; $n] {
+            // SAFETY: as `new`; `f32`'s alignment is at most the register's.
+            unsafe { &*(self as *const Self).cast::<[f32; $n]>() }
+        }
+        #[inline(always)]
+        fn as_mut_array(&mut self) -> &mut [f32; $n] {
+            // SAFETY: as `as_array`.
+            unsafe { &mut *(self as *mut Self).cast::<[f32; $n]>() }
+        }
+    };
 }
 
 /// Ordered comparisons (false where either lane is NaN), whose right side
@@ -56,47 +85,16 @@ macro_rules! compare {
 // SAFETY (every `unsafe` block below): the instructions are AVX or AVX2,
 // which the processor has wherever these run (see the module docs).
 impl Lane for F8 {
-    const N: usize = LANES;
-    type Array<T: Copy> = [T; LANES];
-    #[inline(always)]
-    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; LANES] {
-        each(f)
-    }
-    #[inline(always)]
-    fn chunk<T: Copy>(items: &[T]) -> &[T; LANES] {
-        items.try_into().expect("a whole chunk")
-    }
-    #[inline(always)]
-    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; LANES] {
-        items.try_into().expect("a whole chunk")
-    }
+    chunks_of!(LANES, each);
     const ZERO: Self = Self::of([0.0; LANES]);
     const ONE: Self = Self::of([1.0; LANES]);
     const PI: Self = Self::of([std::f32::consts::PI; LANES]);
     const FRAC_PI_2: Self = Self::of([std::f32::consts::FRAC_PI_2; LANES]);
 
-    #[inline(always)]
-    fn new(v: [f32; LANES]) -> Self {
-        Self::of(v)
-    }
+    as_floats!(LANES);
     #[inline(always)]
     fn splat(v: f32) -> Self {
         unsafe { Self(_mm256_set1_ps(v)) }
-    }
-    #[inline(always)]
-    fn to_array(self) -> [f32; LANES] {
-        // SAFETY: the same size, and any bits are valid `f32`s.
-        unsafe { std::mem::transmute(self) }
-    }
-    #[inline(always)]
-    fn as_array(&self) -> &[f32; LANES] {
-        // SAFETY: `repr(transparent)` over 32 bytes of eight `f32`s.
-        unsafe { &*(self as *const Self).cast::<[f32; LANES]>() }
-    }
-    #[inline(always)]
-    fn as_mut_array(&mut self) -> &mut [f32; LANES] {
-        // SAFETY: as `as_array`.
-        unsafe { &mut *(self as *mut Self).cast::<[f32; LANES]>() }
     }
     compare! {
         simd_lt: _CMP_LT_OQ,
@@ -266,49 +264,16 @@ macro_rules! compare_halves {
 }
 
 impl Lane for F16 {
-    const N: usize = WIDE_LANES;
-    type Array<T: Copy> = [T; WIDE_LANES];
-    #[inline(always)]
-    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; WIDE_LANES] {
-        std::array::from_fn(f)
-    }
-    #[inline(always)]
-    fn chunk<T: Copy>(items: &[T]) -> &[T; WIDE_LANES] {
-        items.try_into().expect("a whole chunk")
-    }
-    #[inline(always)]
-    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; WIDE_LANES] {
-        items.try_into().expect("a whole chunk")
-    }
+    chunks_of!(WIDE_LANES, std::array::from_fn);
     const ZERO: Self = Self::halves(F8::ZERO);
     const ONE: Self = Self::halves(F8::ONE);
     const PI: Self = Self::halves(F8::PI);
     const FRAC_PI_2: Self = Self::halves(F8::FRAC_PI_2);
 
-    #[inline(always)]
-    fn new(v: [f32; WIDE_LANES]) -> Self {
-        // SAFETY: `repr(C)` over two 32-byte halves, no padding; any bits
-        // are valid `f32`s.
-        unsafe { std::mem::transmute(v) }
-    }
+    as_floats!(WIDE_LANES);
     #[inline(always)]
     fn splat(v: f32) -> Self {
         Self::halves(F8::splat(v))
-    }
-    #[inline(always)]
-    fn to_array(self) -> [f32; WIDE_LANES] {
-        // SAFETY: as `new`.
-        unsafe { std::mem::transmute(self) }
-    }
-    #[inline(always)]
-    fn as_array(&self) -> &[f32; WIDE_LANES] {
-        // SAFETY: as `new`.
-        unsafe { &*(self as *const Self).cast::<[f32; WIDE_LANES]>() }
-    }
-    #[inline(always)]
-    fn as_mut_array(&mut self) -> &mut [f32; WIDE_LANES] {
-        // SAFETY: as `new`.
-        unsafe { &mut *(self as *mut Self).cast::<[f32; WIDE_LANES]>() }
     }
     compare_halves!(simd_lt, simd_le, simd_gt, simd_ge, simd_eq);
     halves! {

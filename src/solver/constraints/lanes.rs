@@ -176,6 +176,28 @@ pub(crate) struct Chunk<F: Lane> {
     idx: F::Array<usize>,
 }
 
+/// [`Lane`]'s chunk items for a type of `$n` lanes, built by `$each`:
+/// `[T; $n]`, borrowed from a slice of exactly `$n` items.
+macro_rules! chunks_of {
+    ($n:expr, $each:path) => {
+        const N: usize = $n;
+        type Array<T: Copy> = [T; $n];
+        #[inline(always)]
+        fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; $n] {
+            $each(f)
+        }
+        #[inline(always)]
+        fn chunk<T: Copy>(items: &[T]) -> &[T; $n] {
+            items.try_into().expect("a whole chunk")
+        }
+        #[inline(always)]
+        fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; $n] {
+            items.try_into().expect("a whole chunk")
+        }
+    };
+}
+pub(crate) use chunks_of;
+
 /// `[f(0), f(1), …]`, one per lane of an eight-lane type.
 #[inline(always)]
 pub(crate) fn each<U>(mut f: impl FnMut(usize) -> U) -> [U; LANES] {

@@ -3,7 +3,7 @@
 //! lanes of the kernels' portable copy. Each operation is `wide`'s own;
 //! [`avx`](super::avx) gives the same bits in one AVX register.
 
-use super::lanes::{LANES, Lane, Sse, each};
+use super::lanes::{LANES, Lane, Sse, chunks_of, each};
 
 /// Trait methods that are `wide`'s methods of the same name and signature.
 macro_rules! wide_s {
@@ -30,20 +30,7 @@ macro_rules! compare {
 }
 
 impl Lane for Sse {
-    const N: usize = LANES;
-    type Array<T: Copy> = [T; LANES];
-    #[inline(always)]
-    fn each<T: Copy>(f: impl FnMut(usize) -> T) -> [T; LANES] {
-        each(f)
-    }
-    #[inline(always)]
-    fn chunk<T: Copy>(items: &[T]) -> &[T; LANES] {
-        items.try_into().expect("a whole chunk")
-    }
-    #[inline(always)]
-    fn chunk_mut<T: Copy>(items: &mut [T]) -> &mut [T; LANES] {
-        items.try_into().expect("a whole chunk")
-    }
+    chunks_of!(LANES, each);
     const ZERO: Self = wide::f32x8::ZERO;
     const ONE: Self = wide::f32x8::ONE;
     const PI: Self = wide::f32x8::PI;
