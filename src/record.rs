@@ -125,6 +125,9 @@ pub struct Run {
     pub telemetry: Telemetry,
     figures: Figures,
     wall: std::time::Duration,
+    /// Whether the solver collects every diagnostic at every step, not just
+    /// what the telemetry logs ([`Run::diagnose_every_step`]).
+    every_diagnostic: bool,
 }
 
 impl Run {
@@ -150,6 +153,7 @@ impl Run {
             scene,
             telemetry,
             wall: std::time::Duration::ZERO,
+            every_diagnostic: false,
         };
         run.telemetry.log_static(&run.scene, resolved)?;
         let tuning = run.scene.tuning();
@@ -170,6 +174,17 @@ impl Run {
         self.scene.set_tuning(tuning)
     }
 
+    /// Has the solver collect every diagnostic, every particle's
+    /// corrections included, at every step, whatever the telemetry logs (the
+    /// desktop debugger's readouts). Otherwise a step collects only what the
+    /// frame it produces logs ([`Telemetry::configure_step`]).
+    pub fn diagnose_every_step(&mut self) {
+        self.every_diagnostic = true;
+        let solver = self.scene.solver_mut();
+        solver.set_diagnostics(true);
+        solver.record_corrections(true);
+    }
+
     /// Steps one frame and logs it.
     pub fn step(&mut self) -> Result<(), RunError> {
         let start = Instant::now();
@@ -177,6 +192,10 @@ impl Run {
         let time = self.scene.time() + self.scene.solver().params().dt as f64;
         let tuning = self.scene.tuning();
         self.telemetry.log_tuning(frame, time, &tuning)?;
+        if !self.every_diagnostic {
+            self.telemetry
+                .configure_step(self.scene.solver_mut(), frame);
+        }
         if let Err(error) = self.scene.step() {
             self.figures.finite = false;
             self.figures.failure = Some(error.to_string());

@@ -225,6 +225,57 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
     );
 }
 
+/// With `log_every = N`, only the steps that produce a logged frame track
+/// every particle's corrections (they cost the step time), and what a logged
+/// frame holds is the same bit for bit as with every frame logged.
+#[test]
+fn log_every_tracks_corrections_only_for_the_frames_it_logs() {
+    let start = |every: &str| {
+        let overrides = sets(&["telemetry.level=\"full\"", every]);
+        let loaded = load::load("windy_flag", &overrides).unwrap();
+        let scene = Scene::new(&loaded.preset).unwrap();
+        let telemetry = Telemetry::new(rerun::RecordingStream::disabled(), loaded.preset.telemetry);
+        Run::start(scene, telemetry, "windy_flag", &loaded.resolved).unwrap()
+    };
+    let (mut all, mut thin) = (
+        start("telemetry.log_every=1"),
+        start("telemetry.log_every=3"),
+    );
+    let bits = |v: &[glam::Vec3]| -> Vec<[u32; 3]> {
+        v.iter().map(|v| v.to_array().map(f32::to_bits)).collect()
+    };
+    let mut moved = false;
+    for frame in 1..=9u64 {
+        all.step().unwrap();
+        thin.step().unwrap();
+        let (a, b) = (
+            all.scene.solver().diagnostics().unwrap(),
+            thin.scene.solver().diagnostics().unwrap(),
+        );
+        assert!(a.corrections);
+        assert_eq!(b.corrections, frame % 3 == 0, "frame {frame}");
+        assert_eq!(
+            bits(&all.scene.solver().state().position),
+            bits(&thin.scene.solver().state().position),
+            "frame {frame}"
+        );
+        if frame % 3 == 0 {
+            for f in Family::ALL {
+                let (fa, fb) = (a.family(f), b.family(f));
+                assert_eq!(bits(&fa.dx), bits(&fb.dx), "{f:?} δx, frame {frame}");
+                assert_eq!(
+                    bits(&fa.dtheta),
+                    bits(&fb.dtheta),
+                    "{f:?} δθ, frame {frame}"
+                );
+                assert_eq!(fa.max_rotation.to_bits(), fb.max_rotation.to_bits());
+                moved |= fa.dx.iter().any(|v| *v != glam::Vec3::ZERO);
+            }
+        }
+    }
+    assert!(moved, "the flag's families move it");
+}
+
 #[test]
 fn failing_expectation_exits_non_zero_and_names_the_bound() {
     let dir = tempfile::tempdir().unwrap();

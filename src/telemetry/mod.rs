@@ -127,6 +127,16 @@ impl Telemetry {
         solver.record_corrections(self.needs_corrections());
     }
 
+    /// As [`configure`](Self::configure), for the step that produces
+    /// `frame`: every particle's corrections only if that frame is logged.
+    /// They describe one step's adjust phase, so with `log_every = N` the
+    /// steps in between need not track them; what a logged frame shows is
+    /// the same bit for bit.
+    pub fn configure_step(&self, solver: &mut Solver, frame: u64) {
+        solver.set_diagnostics(self.needs_diagnostics());
+        solver.record_corrections(self.needs_corrections() && self.logs_frame(frame));
+    }
+
     /// Whether frame `frame` is logged.
     pub fn logs_frame(&self, frame: u64) -> bool {
         self.settings.level != Level::Off && frame.is_multiple_of(self.settings.log_every as u64)

@@ -166,9 +166,7 @@ pub(super) fn open(
     // The panel's readouts need diagnostics whatever the telemetry level,
     // and the panel can switch to level full or colouring by correction at
     // any step, so every particle's corrections are recorded too.
-    let solver = run.scene.solver_mut();
-    solver.set_diagnostics(true);
-    solver.record_corrections(true);
+    run.diagnose_every_step();
     if let Some(t) = tuning {
         run.set_tuning(&t).map_err(|e| e.to_string())?;
     }
