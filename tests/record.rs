@@ -225,6 +225,34 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
     );
 }
 
+/// At level summary the scene around the cloth moves with it, so the
+/// viewer's camera (which frames what is drawn at the current frame)
+/// follows the car down the road: the bodies' poses and the road's patch
+/// (four corners, its triangles static) are logged at every frame.
+#[test]
+fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("car.rrd");
+    let frames = 8;
+    record_to(
+        &path,
+        "flag_on_car",
+        &["telemetry.level=\"summary\""],
+        frames,
+        |_| {},
+    );
+    let rec = read::read(&path).unwrap();
+    let every: Vec<i64> = (0..=frames as i64).collect();
+    assert_eq!(rec.frames(&paths::body("car")), every);
+    // flag_on_car's colliders: the car's box (0), then the road (1).
+    let road = &rec.entities[&paths::world_collider(1)];
+    assert_eq!(road.frames.iter().copied().collect::<Vec<_>>(), every);
+    assert!(road.is_static, "the road's triangles are static");
+    assert!(road.lengths.iter().all(|l| *l == 4), "{:?}", road.lengths);
+    // The car's box is static, in the car's frame.
+    assert!(rec.entities[&paths::body_collider("car", 0)].is_static);
+}
+
 /// With `log_every = N`, only the steps that produce a logged frame track
 /// every particle's corrections (they cost the step time), and what a logged
 /// frame holds is the same bit for bit as with every frame logged.

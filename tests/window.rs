@@ -39,7 +39,7 @@ fn the_window_shows_the_cloth_and_the_panel() {
         ])
         .arg("--screenshot")
         .arg(&shot)
-        .args(["--frames", "60"])
+        .args(["--frames", "300"])
         .env_remove("WAYLAND_DISPLAY")
         .current_dir(dir.path())
         .output()
@@ -54,17 +54,19 @@ fn the_window_shows_the_cloth_and_the_panel() {
     assert_eq!((img.width(), img.height()), (1400, 860));
 
     // The 3D view (left of the plots): the cloth, on the scene's ground and
-    // car. At level `full` its particles carry the families' correction
-    // arrows, in strongly saturated colours (as is the strain ramp), where
-    // the ground, the car and the sky are greys of saturation below 50. The
-    // cloth's colours change with its state at the captured frame, which
-    // the simulation thread does not wait for; their saturation does not
-    // (115-135 such pixels, a share of 7e-4, in every capture seen).
-    let view = ((0.15, 0.39), (0.07, 0.66));
+    // car, 5 s and some 40 m down the road, so the view has followed them
+    // (a camera fixed on the start saw an empty ground by then). At level
+    // `full` its particles carry the families' correction arrows, in
+    // strongly saturated colours (as is the strain ramp), where the ground,
+    // the car and the sky are greys of saturation below 50. The cloth's
+    // colours change with its state at the captured frame, which the
+    // simulation thread does not wait for; their saturation does not (a
+    // share of 0.014-0.016 in the captures seen; 0 with the camera fixed).
+    let view = ((0.15, 0.38), (0.07, 0.66));
     let cloth = share(&img, view.0, view.1, |[r, g, b, _]| {
         r.max(g).max(b) - r.min(g).min(b) > 70
     });
-    assert!(cloth > 2e-4, "no cloth in the 3D view ({cloth})");
+    assert!(cloth > 4e-3, "no cloth in the 3D view ({cloth})");
     let lit = share(&img, view.0, view.1, |[r, g, b, _]| {
         r as u32 + g as u32 + b as u32 > 150
     });

@@ -2,10 +2,18 @@
 //! plots of violations, strain and energy, and timings.
 
 use rerun::blueprint::{
-    Blueprint, Horizontal, Spatial3DView, TextLogView, TimePanel, TimeSeriesView, Vertical,
+    Blueprint, Horizontal, SelectionPanel, Spatial3DView, TextLogView, TimePanel, TimeSeriesView,
+    Vertical, components::PanelState,
 };
 
 use super::paths;
+
+/// The layout of the desktop debugger: [`default`], with Rerun's selection
+/// panel collapsed to give the 3D view its width (the tuning panel shows the
+/// selected particle; the selection panel opens from the viewer's top bar).
+pub fn desktop() -> Blueprint {
+    default().with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
+}
 
 /// The layout a recording opens with.
 pub fn default() -> Blueprint {

@@ -14,8 +14,8 @@
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows) | full |
-//! | `world/bodies/{name}` | body transform; its colliders below it | full |
-//! | `world/colliders/{k}` | fixed colliders | static |
+//! | `world/bodies/{name}` | body transform; its colliders below it | summary |
+//! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth ([`colliders`]) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
 //! | `metrics/violation/self/crossings` | mesh edges through a triangle (0 when the cloth does not pass through itself), while self-collision is on | summary |
 //! | `metrics/strain/max`, `metrics/energy/kinetic` | strain, energy | summary |
@@ -28,6 +28,7 @@
 
 mod batch;
 pub mod blueprint;
+mod colliders;
 pub mod color;
 pub mod paths;
 pub mod read;
@@ -39,9 +40,9 @@ use rerun::{RecordingStream, RecordingStreamResult};
 
 use crate::scene::{
     Scene, Tuning,
-    preset::{Level, ShapeKind, TelemetrySettings},
+    preset::{Level, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, Pose, Solver, StepError};
+use crate::solver::{Diagnostics, Family, Solver, StepError};
 
 /// How Rerun batches a recording written to a file (or a pipe): into
 /// chunks flushed every 200 ms (Rerun's default tick), not every 2 MiB.
@@ -206,82 +207,8 @@ impl Telemetry {
                 .with_triangle_indices(triangles)
                 .with_albedo_factor(rerun::Rgba32::from_rgb(200, 170, 120)),
         )?;
-        self.log_colliders(scene)?;
+        colliders::log_static(&self.rec, scene)?;
         self.log_series_styles()?;
-        Ok(())
-    }
-
-    fn log_colliders(&self, scene: &Scene) -> RecordingStreamResult<()> {
-        for (k, c) in scene.preset().colliders.iter().enumerate() {
-            let path = match &c.body {
-                Some(b) => paths::body_collider(b, k),
-                None => paths::world_collider(k),
-            };
-            let rotation = crate::scene::preset::euler(c.rotation);
-            let colour = rerun::Color::from_unmultiplied_rgba(120, 140, 170, 160);
-            match c.shape {
-                ShapeKind::Plane => {
-                    let pose = Pose::new(c.position, rotation);
-                    let s = 10.0;
-                    let corners = [[-s, -s], [s, -s], [s, s], [-s, s]]
-                        .map(|[x, y]| pose.transform_point(Vec3::new(x, y, 0.0)));
-                    self.rec.log_static(
-                        path,
-                        &rerun::Mesh3D::new(corners)
-                            .with_triangle_indices([[0, 1, 2], [0, 2, 3]])
-                            .with_albedo_factor(rerun::Rgba32::from_unmultiplied_rgba(
-                                90, 100, 90, 255,
-                            )),
-                    )?;
-                }
-                ShapeKind::Sphere => self.rec.log_static(
-                    path,
-                    &rerun::Ellipsoids3D::from_centers_and_radii(
-                        [c.position],
-                        [c.radius.unwrap_or(0.0)],
-                    )
-                    .with_colors([colour])
-                    .with_fill_mode(rerun::FillMode::Solid),
-                )?,
-                ShapeKind::Capsule => {
-                    let h = c.half_length.unwrap_or(0.0);
-                    let axis = rotation * Vec3::Z * h;
-                    self.rec.log_static(
-                        path,
-                        &rerun::Capsules3D::from_endpoints_and_radii(
-                            [c.position - axis],
-                            [c.position + axis],
-                            [c.radius.unwrap_or(0.0)],
-                        )
-                        .with_colors([colour]),
-                    )?
-                }
-                ShapeKind::Cylinder => {
-                    let h = c.half_length.unwrap_or(0.0);
-                    self.rec.log_static(
-                        path,
-                        &rerun::Cylinders3D::from_lengths_and_radii(
-                            [2.0 * h],
-                            [c.radius.unwrap_or(0.0)],
-                        )
-                        .with_centers([c.position])
-                        .with_quaternions([rotation])
-                        .with_colors([colour])
-                        .with_fill_mode(rerun::FillMode::Solid),
-                    )?
-                }
-                ShapeKind::Box => self.rec.log_static(
-                    path,
-                    &rerun::Boxes3D::from_centers_and_half_sizes(
-                        [c.position],
-                        [c.half_extents.unwrap_or(Vec3::ZERO)],
-                    )
-                    .with_quaternions([rotation])
-                    .with_colors([colour])
-                    .with_fill_mode(rerun::FillMode::Solid),
-                )?,
-            }
-        }
         Ok(())
     }
 
@@ -434,6 +361,13 @@ impl Telemetry {
                 .with_colors(colours.iter().copied())
                 .with_radii([radius]),
         )?;
+        colliders::log_planes(rec, scene, x)?;
+        for (name, pose) in scene.body_names().zip(scene.body_poses()) {
+            rec.log(
+                paths::body(name),
+                &rerun::Transform3D::from_translation_rotation(pose.translation, pose.rotation),
+            )?;
+        }
 
         if self.settings.level == Level::Full {
             let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
@@ -448,12 +382,6 @@ impl Telemetry {
             }
             if self.particle_values {
                 self.log_particle_values(scene)?;
-            }
-            for (name, pose) in scene.body_names().zip(scene.body_poses()) {
-                rec.log(
-                    paths::body(name),
-                    &rerun::Transform3D::from_translation_rotation(pose.translation, pose.rotation),
-                )?;
             }
         }
         self.last_cost = start.elapsed();

@@ -59,7 +59,7 @@ pub fn stream(
     let sink_tee = tee.clone();
     let rec = rerun::RecordingStreamBuilder::new("weft")
         .recording_name(name)
-        .with_default_blueprint(blueprint::default())
+        .with_default_blueprint(blueprint::desktop())
         .buffered()
         .expect("a buffered stream always opens");
     rec.set_sink(Box::new(rerun::sink::CallbackSink::new(move |msgs| {
