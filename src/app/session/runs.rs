@@ -45,8 +45,9 @@ impl Tee {
     }
 }
 
-/// A new recording named `name`, with weft's blueprint, whose messages go
-/// to `forward` and, from the first one, to `file`.
+/// A new recording named `name`, whose messages go to `forward` and, from
+/// the first one, to `file`. Its blueprint is sent by [`send_blueprint`]
+/// once the run's first frame is in.
 pub fn stream(
     forward: Forward,
     name: &str,
@@ -59,7 +60,6 @@ pub fn stream(
     let sink_tee = tee.clone();
     let rec = rerun::RecordingStreamBuilder::new("weft")
         .recording_name(name)
-        .with_default_blueprint(blueprint::desktop())
         .buffered()
         .expect("a buffered stream always opens");
     rec.set_sink(Box::new(rerun::sink::CallbackSink::new(move |msgs| {
@@ -68,6 +68,22 @@ pub fn stream(
         }
     })));
     (rec, tee)
+}
+
+/// Sends weft's layout for `rec`, after what has been logged so far: sent
+/// before the first frame, its time panel would name the `sim_time`
+/// timeline before the recording has it, and the viewer would warn. The
+/// first run's layout is made active; later runs' is the default, so a
+/// layout the user has changed stays.
+fn send_blueprint(rec: &rerun::RecordingStream, first: bool) -> Result<(), String> {
+    rec.flush_blocking().map_err(|e| e.to_string())?;
+    let activation = rerun::blueprint::BlueprintActivation {
+        make_active: first,
+        make_default: true,
+    };
+    blueprint::desktop()
+        .send(rec, activation)
+        .map_err(|e| e.to_string())
 }
 
 /// How a new run starts.
@@ -163,6 +179,7 @@ pub(super) fn open(
         _ => unreachable!("a run starts from a scene or a snapshot"),
     }
     .map_err(|e| e.to_string())?;
+    send_blueprint(&rec, info.number == 1)?;
     // The panel's readouts need diagnostics whatever the telemetry level,
     // and the panel can switch to level full or colouring by correction at
     // any step, so every particle's corrections are recorded too.
