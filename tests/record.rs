@@ -227,7 +227,7 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
 
 /// At level summary the scene around the cloth moves with it, so the
 /// viewer's camera (which frames what is drawn at the current frame)
-/// follows the car down the road: the bodies' poses and the road's patch
+/// follows the car down the road: a moving body's pose and the road's patch
 /// (four corners, its triangles static) are logged at every frame.
 #[test]
 fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
@@ -251,6 +251,18 @@ fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
     assert!(road.lengths.iter().all(|l| *l == 4), "{:?}", road.lengths);
     // The car's box is static, in the car's frame.
     assert!(rec.entities[&paths::body_collider("car", 0)].is_static);
+
+    // A body that does not move has its pose logged once.
+    let path = dir.path().join("sheet.rrd");
+    record_to(
+        &path,
+        "hanging_sheet",
+        &["telemetry.level=\"summary\""],
+        frames,
+        |_| {},
+    );
+    let rec = read::read(&path).unwrap();
+    assert_eq!(rec.frames(&paths::body("rail")), vec![0]);
 }
 
 /// With `log_every = N`, only the steps that produce a logged frame track

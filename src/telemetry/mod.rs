@@ -14,7 +14,7 @@
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows) | full |
-//! | `world/bodies/{name}` | body transform; its colliders below it | summary |
+//! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
 //! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth ([`colliders`]) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
 //! | `metrics/violation/self/crossings` | mesh edges through a triangle (0 when the cloth does not pass through itself), while self-collision is on | summary |
@@ -42,7 +42,7 @@ use crate::scene::{
     Scene, Tuning,
     preset::{Level, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, Solver, StepError};
+use crate::solver::{Diagnostics, Family, Pose, Solver, StepError};
 
 /// How Rerun batches a recording written to a file (or a pipe): into
 /// chunks flushed every 200 ms (Rerun's default tick), not every 2 MiB.
@@ -70,6 +70,8 @@ pub struct Telemetry {
     rec: RecordingStream,
     settings: TelemetrySettings,
     last_tuning: Option<Tuning>,
+    /// The body poses last logged (a pose that does not change is logged once).
+    last_poses: Vec<Option<Pose>>,
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
     particle_values: bool,
@@ -82,6 +84,7 @@ impl Telemetry {
             rec,
             settings,
             last_tuning: None,
+            last_poses: Vec::new(),
             last_cost: Duration::ZERO,
             particle_values: false,
         }
@@ -271,6 +274,7 @@ impl Telemetry {
     /// Forgets what was logged, so everything is logged again (for a new sink).
     pub fn forget(&mut self) {
         self.last_tuning = None;
+        self.last_poses.clear();
     }
 
     /// Logs an informational event at `frame`.
@@ -362,12 +366,6 @@ impl Telemetry {
                 .with_radii([radius]),
         )?;
         colliders::log_planes(rec, scene, x)?;
-        for (name, pose) in scene.body_names().zip(scene.body_poses()) {
-            rec.log(
-                paths::body(name),
-                &rerun::Transform3D::from_translation_rotation(pose.translation, pose.rotation),
-            )?;
-        }
 
         if self.settings.level == Level::Full {
             let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
@@ -384,7 +382,25 @@ impl Telemetry {
                 self.log_particle_values(scene)?;
             }
         }
+        self.log_bodies(scene)?;
         self.last_cost = start.elapsed();
+        Ok(())
+    }
+
+    /// Logs each body's pose, if it moved since it was last logged (a
+    /// static body's once: the viewer holds the latest pose).
+    fn log_bodies(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
+        let poses = scene.body_poses();
+        self.last_poses.resize(poses.len(), None);
+        for ((name, pose), last) in scene.body_names().zip(poses).zip(&mut self.last_poses) {
+            if *last != Some(*pose) {
+                self.rec.log(
+                    paths::body(name),
+                    &rerun::Transform3D::from_translation_rotation(pose.translation, pose.rotation),
+                )?;
+                *last = Some(*pose);
+            }
+        }
         Ok(())
     }
 
