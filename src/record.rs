@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, Tuning, preset::Expect};
 use crate::solver::{Family, Params, StepError};
-use crate::telemetry::{Telemetry, paths};
+use crate::telemetry::{Collect, Telemetry, paths};
 
 /// What a run measured.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -125,9 +125,9 @@ pub struct Run {
     pub telemetry: Telemetry,
     figures: Figures,
     wall: std::time::Duration,
-    /// Whether the solver collects every diagnostic at every step, not just
-    /// what the telemetry logs ([`Run::diagnose_every_step`]).
-    every_diagnostic: bool,
+    /// What the solver collects at every step, whatever the telemetry logs
+    /// ([`Run::diagnose_every_step`]).
+    every_step: Collect,
 }
 
 impl Run {
@@ -153,7 +153,7 @@ impl Run {
             scene,
             telemetry,
             wall: std::time::Duration::ZERO,
-            every_diagnostic: false,
+            every_step: Collect::default(),
         };
         run.telemetry.log_static(&run.scene, resolved)?;
         let tuning = run.scene.tuning();
@@ -174,15 +174,12 @@ impl Run {
         self.scene.set_tuning(tuning)
     }
 
-    /// Has the solver collect every diagnostic, every particle's
-    /// corrections included, at every step, whatever the telemetry logs (the
-    /// desktop debugger's readouts). Otherwise a step collects only what the
-    /// frame it produces logs ([`Telemetry::configure_step`]).
-    pub fn diagnose_every_step(&mut self) {
-        self.every_diagnostic = true;
-        let solver = self.scene.solver_mut();
-        solver.set_diagnostics(true);
-        solver.record_corrections(true);
+    /// Has the solver collect `what` at every step, whatever the telemetry
+    /// logs (the desktop debugger's readouts, and its particle inspector).
+    /// A step collects at least what the frame it produces logs
+    /// ([`Telemetry::collects_for_step`]).
+    pub fn diagnose_every_step(&mut self, what: Collect) {
+        self.every_step = what;
     }
 
     /// Steps one frame and logs it.
@@ -192,10 +189,10 @@ impl Run {
         let time = self.scene.time() + self.scene.solver().params().dt as f64;
         let tuning = self.scene.tuning();
         self.telemetry.log_tuning(frame, time, &tuning)?;
-        if !self.every_diagnostic {
-            self.telemetry
-                .configure_step(self.scene.solver_mut(), frame);
-        }
+        self.telemetry
+            .collects_for_step(frame)
+            .or(self.every_step)
+            .apply(self.scene.solver_mut());
         if let Err(error) = self.scene.step() {
             self.figures.finite = false;
             self.figures.failure = Some(error.to_string());

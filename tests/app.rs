@@ -23,7 +23,13 @@ struct State {
 const WAIT: Duration = Duration::from_secs(20);
 
 fn state(preset: &str) -> State {
-    let loaded = load::load(preset, &[]).unwrap();
+    state_with(preset, &[])
+}
+
+/// A session of `preset` with `--set` overrides such as `expect.max_strain=0.1`.
+fn state_with(preset: &str, sets: &[&str]) -> State {
+    let sets: Vec<_> = sets.iter().map(|s| s.parse().unwrap()).collect();
+    let loaded = load::load(preset, &sets).unwrap();
     let session = Session::start(loaded, preset.into(), |_| {}).unwrap();
     let panel = Panel::new(&session.status());
     State { panel, session }
@@ -506,6 +512,58 @@ fn the_viewer_time_cursor_picks_the_branch_frame() {
     );
 }
 
+/// At level summary the session has the solver track every particle's
+/// corrections only while the inspector follows a particle (they cost about
+/// an eighth of a step): picked while paused, the particle's δx and δθ read
+/// "–" until the next step records them, and a step taken with the inspector
+/// off records none.
+#[test]
+fn the_inspector_asks_for_corrections_only_while_it_follows_a_particle() {
+    let mut h = harness(state_with(
+        "hanging_sheet",
+        &["telemetry.level=\"summary\""],
+    ));
+    h.run();
+    let step_to = |h: &mut Harness<'_, State>, frame: u64| {
+        h.state().session.send(Command::Step);
+        assert!(h.state().session.wait_for(WAIT, |s| s.frame == frame));
+    };
+    let inspected = |h: &mut Harness<'_, State>, on: bool| {
+        assert!(
+            h.state()
+                .session
+                .wait_for(WAIT, |s| s.particle.is_some() == on)
+        );
+        h.run();
+        h.state().session.status().particle
+    };
+    step_to(&mut h, 1);
+    // The panel's checkbox follows particle 0, the sheet's free bottom-left
+    // corner.
+    click(&mut h, "inspect particle");
+    let p = inspected(&mut h, true).unwrap();
+    assert_eq!(p.index, 0);
+    assert!(
+        !p.corrections,
+        "frame 1 was stepped before the particle was picked"
+    );
+    assert_eq!(h.query_all_by_label("–").count(), 2 * Family::ALL.len());
+
+    step_to(&mut h, 2);
+    h.run();
+    let p = h.state().session.status().particle.unwrap();
+    assert!(p.corrections, "{p:?}");
+    assert!(p.dx[Family::Stretch].length() > 0.0, "{p:?}");
+    assert!(h.query_all_by_label("–").next().is_none());
+
+    click(&mut h, "inspect particle");
+    inspected(&mut h, false);
+    step_to(&mut h, 3);
+    click(&mut h, "inspect particle");
+    let p = inspected(&mut h, true).unwrap();
+    assert!(!p.corrections, "frame 3 was stepped with the inspector off");
+}
+
 /// Selecting a particle in the 3D view shows its numbers in the panel; the
 /// same numbers are logged per particle on the particles entity.
 #[test]
@@ -560,11 +618,7 @@ fn the_inspector_shows_the_selected_particle() {
 /// live, and starts over with the run.
 #[test]
 fn live_verdicts() {
-    let overrides = ["expect.max_strain=0.0001".parse().unwrap()];
-    let loaded = load::load("flag_on_car", &overrides).unwrap();
-    let session = Session::start(loaded, "flag_on_car".into(), |_| {}).unwrap();
-    let panel = Panel::new(&session.status());
-    let mut h = harness(State { panel, session });
+    let mut h = harness(state_with("flag_on_car", &["expect.max_strain=0.0001"]));
     h.run();
     h.get_by_label("max_strain");
     assert!(h.query_all_by_label("FAIL").next().is_none());

@@ -446,11 +446,21 @@ impl Panel {
                 ui.label("|δx| (mm)");
                 ui.label("|δθ| (mrad)");
                 ui.end_row();
+                // Until a step records them (at level summary, the step
+                // after the particle is picked), the corrections read "–".
+                let correction = |ui: &mut egui::Ui, v: glam::Vec3| {
+                    if p.corrections {
+                        ui.monospace(format!("{:.4}", v.length() * 1e3));
+                    } else {
+                        ui.monospace("–")
+                            .on_hover_text("recorded from the next step");
+                    }
+                };
                 for f in Family::ALL {
                     ui.label(f.name());
                     ui.monospace(format!("{:.4}", p.violation[f]));
-                    ui.monospace(format!("{:.4}", p.dx[f].length() * 1e3));
-                    ui.monospace(format!("{:.4}", p.dtheta[f].length() * 1e3));
+                    correction(ui, p.dx[f]);
+                    correction(ui, p.dtheta[f]);
                     ui.end_row();
                 }
             });

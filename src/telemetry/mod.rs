@@ -65,6 +65,32 @@ pub fn file_batching() -> Result<rerun::log::ChunkBatcherConfig, rerun::log::Chu
 /// does: above what 200 ms of full frames of a 128 × 128 sheet hold.
 const FILE_CHUNK_BYTES: u64 = 32 << 20;
 
+/// What the solver collects in a step, beyond the step itself (each costs
+/// step time).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Collect {
+    /// The figures and timings ([`Solver::set_diagnostics`]).
+    pub figures: bool,
+    /// Every particle's corrections as well ([`Solver::record_corrections`]).
+    pub corrections: bool,
+}
+
+impl Collect {
+    /// What this or `other` collects.
+    pub fn or(self, other: Collect) -> Collect {
+        Collect {
+            figures: self.figures || other.figures,
+            corrections: self.corrections || other.corrections,
+        }
+    }
+
+    /// Sets `solver`'s switches to collect this.
+    pub fn apply(self, solver: &mut Solver) {
+        solver.set_diagnostics(self.figures || self.corrections);
+        solver.record_corrections(self.corrections);
+    }
+}
+
 /// Streams a scene to a Rerun recording.
 pub struct Telemetry {
     rec: RecordingStream,
@@ -127,18 +153,23 @@ impl Telemetry {
     /// Has `solver` collect the diagnostics this telemetry logs, and no
     /// more (they cost the step time).
     pub fn configure(&self, solver: &mut Solver) {
-        solver.set_diagnostics(self.needs_diagnostics());
-        solver.record_corrections(self.needs_corrections());
+        Collect {
+            figures: self.needs_diagnostics(),
+            corrections: self.needs_corrections(),
+        }
+        .apply(solver);
     }
 
-    /// As [`configure`](Self::configure), for the step that produces
-    /// `frame`: every particle's corrections only if that frame is logged.
-    /// They describe one step's adjust phase, so with `log_every = N` the
-    /// steps in between need not track them; what a logged frame shows is
-    /// the same bit for bit.
-    pub fn configure_step(&self, solver: &mut Solver, frame: u64) {
-        solver.set_diagnostics(self.needs_diagnostics());
-        solver.record_corrections(self.needs_corrections() && self.logs_frame(frame));
+    /// What the step that produces `frame` must collect for this telemetry:
+    /// as [`configure`](Self::configure), but every particle's corrections
+    /// only if that frame is logged. They describe one step's adjust phase,
+    /// so with `log_every = N` the steps in between need not track them;
+    /// what a logged frame shows is the same bit for bit.
+    pub fn collects_for_step(&self, frame: u64) -> Collect {
+        Collect {
+            figures: self.needs_diagnostics(),
+            corrections: self.needs_corrections() && self.logs_frame(frame),
+        }
     }
 
     /// Whether frame `frame` is logged.

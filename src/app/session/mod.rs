@@ -96,6 +96,10 @@ pub struct ParticleReadout {
     pub strain: f32,
     /// Per family, the largest violation of the constraints that involve it.
     pub violation: PerFamily<f32>,
+    /// Whether the last step recorded its corrections (`dx` and `dtheta`
+    /// are zero if not): from the step after the particle is picked, or at
+    /// every step at level full or colouring by correction.
+    pub corrections: bool,
     /// Per family, the translation applied to it in the last adjust.
     pub dx: PerFamily<Vec3>,
     /// Per family, the rotation applied to it (axis × angle, radians).

@@ -180,10 +180,6 @@ pub(super) fn open(
     }
     .map_err(|e| e.to_string())?;
     send_blueprint(&rec, info.number == 1)?;
-    // The panel's readouts need diagnostics whatever the telemetry level,
-    // and the panel can switch to level full or colouring by correction at
-    // any step, so every particle's corrections are recorded too.
-    run.diagnose_every_step();
     if let Some(t) = tuning {
         run.set_tuning(&t).map_err(|e| e.to_string())?;
     }

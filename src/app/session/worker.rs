@@ -12,6 +12,7 @@ use crate::app::history::History;
 use crate::record::{Check, Run, verdict};
 use crate::scene::{Loaded, Scene, load};
 use crate::solver::{Family, PerFamily};
+use crate::telemetry::Collect;
 
 use super::runs::{Forward, Start, Tee, open};
 use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
@@ -59,7 +60,7 @@ impl Worker {
             base,
             None,
         )?;
-        let worker = Self {
+        let mut worker = Self {
             run: opened.run,
             history: opened.history,
             series: Series::new(),
@@ -78,6 +79,7 @@ impl Worker {
             next_step: Instant::now(),
             recent: Default::default(),
         };
+        worker.diagnose();
         worker.publish();
         Ok(worker)
     }
@@ -186,9 +188,22 @@ impl Worker {
             Command::Inspect(p) => {
                 let n = self.run.scene.solver().state().len();
                 self.inspect = p.filter(|&i| i < n);
+                self.diagnose();
             }
         }
         self.publish();
+    }
+
+    /// Has the run collect what the panel reads after every step, whatever
+    /// the telemetry logs: the figures and timings, and while a particle is
+    /// inspected its corrections (they cost about an eighth of a step; the
+    /// telemetry asks for them itself at level full or colouring by
+    /// correction).
+    fn diagnose(&mut self) {
+        self.run.diagnose_every_step(Collect {
+            figures: true,
+            corrections: self.inspect.is_some(),
+        });
     }
 
     /// The loaded preset with the current tuning and telemetry settings.
@@ -269,6 +284,7 @@ impl Worker {
                 let old = std::mem::replace(&mut self.rec, opened.rec);
                 let flushed = old.flush_blocking();
                 self.run = opened.run;
+                self.diagnose();
                 self.history = opened.history;
                 self.info = opened.info.clone();
                 self.runs.push(opened.info);
@@ -449,9 +465,11 @@ fn readout(scene: &Scene, i: usize) -> ParticleReadout {
         strain: solver.particle_strain()[i],
         ..ParticleReadout::default()
     };
+    let corrections = solver.diagnostics().filter(|d| d.corrections);
+    r.corrections = corrections.is_some();
     for f in Family::ALL {
         r.violation[f] = solver.particle_violation(f)[i];
-        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
+        if let Some(d) = corrections {
             r.dx[f] = d.family(f).dx[i];
             r.dtheta[f] = d.family(f).dtheta[i];
         }
