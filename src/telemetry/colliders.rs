@@ -21,7 +21,7 @@ use crate::scene::{
 use crate::solver::Pose;
 
 /// The side of a plane's patch, in units of the cloth's larger side.
-pub const GROUND_SPAN: f32 = 3.0;
+const GROUND_SPAN: f32 = 3.0;
 
 /// Logs the colliders that never change (all but the planes' patches).
 pub fn log_static(rec: &RecordingStream, scene: &Scene) -> RecordingStreamResult<()> {
