@@ -15,7 +15,7 @@
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows) | full |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
-//! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth ([`colliders`]) | static; a plane's corners at summary |
+//! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth (`colliders.rs`) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
 //! | `metrics/violation/self/crossings` | mesh edges through a triangle (0 when the cloth does not pass through itself), while self-collision is on | summary |
 //! | `metrics/strain/max`, `metrics/energy/kinetic` | strain, energy | summary |
