@@ -286,6 +286,30 @@ fn contacts_push_the_layers_apart_monotonically() {
     assert_eq!(s.self_crossings(), 0);
 }
 
+/// Per particle, the self family's violation is what the figures report,
+/// particle by particle: its largest value is the family's measured max
+/// while the family is on, and, like the figures, it is 0 while the family
+/// is off (the contact search is not run for it).
+#[test]
+fn per_particle_self_violation_agrees_with_the_figures() {
+    for weight in [0.0, 1.0] {
+        let params = Params {
+            weights: Weights::default().with(Family::SelfCollision, weight),
+            ..Params::default()
+        };
+        let s = folded(0.004, params);
+        let each = s.particle_violation(Family::SelfCollision);
+        let largest = each.iter().copied().fold(0.0f32, f32::max);
+        let figures = s.measured_violations()[Family::SelfCollision];
+        assert_eq!(largest, figures.max, "weight {weight}");
+        if weight > 0.0 {
+            assert!(largest > 0.005, "the layers start inside the thickness");
+        } else {
+            assert!(each.iter().all(|v| *v == 0.0));
+        }
+    }
+}
+
 #[test]
 fn a_layer_carried_through_is_pushed_back_to_its_side() {
     // Both layers start apart; the upper one arrives moving down so fast

@@ -437,8 +437,12 @@ impl Solver {
     }
 
     /// Per particle, the largest violation of `family` among the
-    /// constraints that involve it.
+    /// constraints that involve it; self-collision's only while the family
+    /// is on (0 otherwise), as in [`Solver::measured_violations`].
     pub fn particle_violation(&self, family: Family) -> Vec<f32> {
+        if family == Family::SelfCollision && !self.self_collision_on() {
+            return vec![0.0; self.state.len()];
+        }
         family::particle_violation(family, &self.state, &self.topology, &self.spec)
     }
 
