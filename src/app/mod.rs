@@ -81,6 +81,18 @@ impl eframe::App for WeftApp {
     fn logic(&mut self, ctx: &egui::Context, frame: &mut eframe::Frame) {
         self.viewer.logic(ctx, frame);
     }
+
+    /// With `--screenshot`, the window shows what it shows nobody pointing
+    /// at it: wherever the display leaves the pointer (Xvfb, the middle of
+    /// the screen), no tooltip opens over a plot.
+    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        if self.screenshot.is_some() {
+            raw_input
+                .events
+                .retain(|e| !matches!(e, egui::Event::PointerMoved(_)));
+            raw_input.events.push(egui::Event::PointerGone);
+        }
+    }
 }
 
 impl WeftApp {
