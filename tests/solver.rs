@@ -5,7 +5,8 @@
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 use weft::solver::{
-    ClothSpec, Environment, Family, ForcedRotation, Params, Pose, Solver, StepError, Weights, Width,
+    ClothSpec, Environment, Family, ForcedRotation, Params, Pose, Shape, Solver, StepError,
+    Weights, Width,
 };
 
 /// No gravity, no air: nothing acts from outside.
@@ -624,4 +625,32 @@ fn an_exactly_flipped_normal_turns_back() {
         after > 0.99,
         "the flipped element did not turn back: n·n₀ = {after}"
     );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    /// Pushing particles out of colliders skips the points surely beyond the
+    /// margin without measuring them: the early out never skips a point the
+    /// collider would push, and where it measures, it measures as
+    /// `distance` does, bit for bit.
+    #[test]
+    fn a_collider_skips_only_points_beyond_its_reach(
+        p in prop::array::uniform3(-2.0f32..2.0),
+        reach in 0.0f32..0.3,
+        which in 0usize..5,
+    ) {
+        let shapes = [
+            Shape::Plane,
+            Shape::Sphere { radius: 0.7 },
+            Shape::Capsule { radius: 0.3, half_length: 0.8 },
+            Shape::Cylinder { radius: 0.5, half_length: 0.4 },
+            Shape::Box { half_extents: Vec3::new(1.2, 0.4, 0.6) },
+        ];
+        let (shape, p) = (shapes[which], Vec3::from(p));
+        match shape.distance_within(p, reach) {
+            None => prop_assert!(shape.distance(p).0 > reach, "{shape:?} skipped {p}"),
+            Some(measured) => prop_assert_eq!(measured, shape.distance(p)),
+        }
+    }
 }
