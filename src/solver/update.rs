@@ -59,24 +59,29 @@ impl Default for Environment {
 }
 
 /// The acceleration the wind gives an element with normal `n` moving at `v`.
+///
+/// The drag's two parts are `n · k C_n u_n |u_n|` and `u_t · k C_t |u_t|`, so
+/// their magnitudes are `k C_n u_n²` and `k C_t |u_t|²` (`|n| = 1`): the cap
+/// takes them from the speeds, not from the lengths of the acceleration
+/// vectors. Squaring those vectors' components, which for a slowly moving
+/// element are tiny, made subnormal numbers, and a settled sheet in still
+/// air spent half its update phase in their slow arithmetic (BENCHMARKS.md).
 #[inline]
 pub fn wind_acceleration(env: &Environment, areal_density: f32, n: Vec3, v: Vec3, dt: f32) -> Vec3 {
     let u = env.wind - v;
     let un = u.dot(n);
     let ut = u - n * un;
+    let ut_len = ut.length();
     let k = 0.5 * env.air_density / areal_density;
-    let normal = n * (k * env.drag_normal * un * un.abs());
-    let tangent = ut * (k * env.drag_tangent * ut.length());
-    // An explicit drag larger than the relative velocity would overshoot it.
-    let cap = |acc: Vec3, rel: f32| {
-        let dv = acc.length() * dt;
-        if dv > rel && dv > 0.0 {
-            acc * (rel / dv)
-        } else {
-            acc
-        }
+    let normal = k * env.drag_normal * un * un.abs();
+    let tangent = k * env.drag_tangent * ut_len;
+    // An explicit drag larger than the relative velocity would overshoot it:
+    // the factor that caps an acceleration of magnitude `acc` at `rel / dt`.
+    let cap = |acc: f32, rel: f32| {
+        let dv = acc * dt;
+        if dv > rel && dv > 0.0 { rel / dv } else { 1.0 }
     };
-    cap(normal, un.abs()) + cap(tangent, ut.length())
+    n * (normal * cap(normal.abs(), un.abs())) + ut * (tangent * cap(tangent * ut_len, ut_len))
 }
 
 /// What damping measures velocities against: for each particle, the body
