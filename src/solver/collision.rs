@@ -155,9 +155,7 @@ impl Shape {
             }
         }
     }
-}
 
-impl Shape {
     /// As [`distance`](Self::distance), but `None` for a point surely
     /// farther than `reach` from the surface, found without the square root
     /// and the normal: most particles are far from most colliders. A point
