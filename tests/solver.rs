@@ -628,6 +628,26 @@ fn an_exactly_flipped_normal_turns_back() {
     );
 }
 
+/// The wind's acceleration as first written: each part's length taken from
+/// the acceleration vector itself.
+fn wind_by_vector_lengths(env: &Environment, density: f32, n: Vec3, v: Vec3, dt: f32) -> Vec3 {
+    let u = env.wind - v;
+    let un = u.dot(n);
+    let ut = u - n * un;
+    let k = 0.5 * env.air_density / density;
+    let normal = n * (k * env.drag_normal * un * un.abs());
+    let tangent = ut * (k * env.drag_tangent * ut.length());
+    let cap = |acc: Vec3, rel: f32| {
+        let dv = acc.length() * dt;
+        if dv > rel && dv > 0.0 {
+            acc * (rel / dv)
+        } else {
+            acc
+        }
+    };
+    cap(normal, un.abs()) + cap(tangent, ut.length())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(2000))]
 
@@ -654,30 +674,6 @@ proptest! {
             Some(measured) => prop_assert_eq!(measured, shape.distance(p)),
         }
     }
-}
-
-/// The wind's acceleration as first written: each part's length taken from
-/// the acceleration vector itself.
-fn wind_by_vector_lengths(env: &Environment, density: f32, n: Vec3, v: Vec3, dt: f32) -> Vec3 {
-    let u = env.wind - v;
-    let un = u.dot(n);
-    let ut = u - n * un;
-    let k = 0.5 * env.air_density / density;
-    let normal = n * (k * env.drag_normal * un * un.abs());
-    let tangent = ut * (k * env.drag_tangent * ut.length());
-    let cap = |acc: Vec3, rel: f32| {
-        let dv = acc.length() * dt;
-        if dv > rel && dv > 0.0 {
-            acc * (rel / dv)
-        } else {
-            acc
-        }
-    };
-    cap(normal, un.abs()) + cap(tangent, ut.length())
-}
-
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
 
     /// The wind's drag takes each part's magnitude from the speeds (no
     /// squares of tiny acceleration components, which are subnormal for a

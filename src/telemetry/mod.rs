@@ -151,18 +151,15 @@ impl Telemetry {
     }
 
     /// Has `solver` collect the diagnostics this telemetry logs, and no
-    /// more (they cost the step time).
+    /// more (they cost the step time): what the first frame needs, which
+    /// every level but `off` logs.
     pub fn configure(&self, solver: &mut Solver) {
-        Collect {
-            figures: self.needs_diagnostics(),
-            corrections: self.needs_corrections(),
-        }
-        .apply(solver);
+        self.collects_for_step(0).apply(solver);
     }
 
     /// What the step that produces `frame` must collect for this telemetry:
-    /// as [`configure`](Self::configure), but every particle's corrections
-    /// only if that frame is logged. They describe one step's adjust phase,
+    /// the figures at every level but `off`, every particle's corrections
+    /// (level full, or colouring by them) only if that frame is logged. They describe one step's adjust phase,
     /// so with `log_every = N` the steps in between need not track them;
     /// what a logged frame shows is the same bit for bit.
     pub fn collects_for_step(&self, frame: u64) -> Collect {
