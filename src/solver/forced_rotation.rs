@@ -114,9 +114,9 @@ impl ForcedRotation {
 /// the integer nearest `−r / ln 2` and `|f| ≤ ln 2 / 2`, `e^f` by its Taylor
 /// polynomial of degree 7 (truncation below 1e-8, relative error within
 /// 2 ulp). Pure IEEE arithmetic, so it is the same on every machine and
-/// the SIMD lanes reproduce it bit for bit ([`lanes::exp_neg`]).
+/// the SIMD lanes reproduce it bit for bit ([`lanes::math::exp_neg`]).
 ///
-/// [`lanes::exp_neg`]: super::constraints::lanes::exp_neg
+/// [`lanes::math::exp_neg`]: super::constraints::lanes::math::exp_neg
 #[inline]
 pub(crate) fn exp_neg(r: f32) -> f32 {
     let t = -r * std::f32::consts::LOG2_E + EXP_SHIFTER;
