@@ -1,0 +1,300 @@
+//! What self-collision measures and undoes: the pairs closer than the
+//! thickness ([`for_each_close`]), the mesh's edges that cross a triangle
+//! ([`crossings`]), and the particles a jerk left tangled, which the
+//! contacts leave out for a while ([`SelfContacts::find_tangles`]).
+
+use glam::Vec3;
+
+use super::{Foot, SelfContacts, Triangle, bounds};
+use crate::solver::broad_phase::{NearTriangles, SpatialHash};
+use crate::solver::cloth::ClothSpec;
+use crate::solver::topology::Topology;
+
+/// Calls `f(p, triangle, depth)` for every particle–triangle pair (`p` not
+/// a corner) closer than `thickness`, with its foot in the triangle:
+/// `depth = thickness − |distance|`, how far the pair is inside the
+/// thickness. Only positions are read.
+pub fn for_each_close(
+    x: &[Vec3],
+    mesh: &Topology,
+    spec: &ClothSpec,
+    mut f: impl FnMut(u32, [u32; 3], f32),
+) {
+    let h = spec.thickness;
+    if h <= 0.0 {
+        return;
+    }
+    let (dx, dy) = spec.spacing();
+    let mut hash = SpatialHash::default();
+    hash.build(x, dx.max(dy));
+    for (&tri, &rim) in mesh.triangles.iter().zip(&mesh.rims) {
+        let corners = tri.map(|k| x[k as usize]);
+        let (lo, hi) = bounds(corners, h);
+        hash.query(lo, hi, |p| {
+            if tri.contains(&p) {
+                return;
+            }
+            if let Some(foot) = Foot::of(x[p as usize], corners)
+                && foot.inside(rim)
+                && foot.distance.abs() < h
+            {
+                f(p, tri, h - foot.distance.abs());
+            }
+        });
+    }
+}
+
+/// Where segment `u → v` crosses triangle `t`, as the fraction of the way
+/// from `u`, given the ends' signed distances `(du, dv)` from its plane and
+/// its [`edge_margins`]: the ends on opposite sides of the plane and the
+/// crossing point inside the triangle, each by more than [`ON_PLANE`].
+/// `None` otherwise: an edge that only touches the triangle, or lies in its
+/// plane (two layers pressed flat on the ground), does not cross.
+#[inline]
+fn crosses_at(
+    u: Vec3,
+    v: Vec3,
+    (du, dv): (f32, f32),
+    t: &Triangle,
+    margins: &[f32; 3],
+) -> Option<f32> {
+    if du * dv >= 0.0 || du.abs() <= ON_PLANE || dv.abs() <= ON_PLANE {
+        return None;
+    }
+    let at = du / (du - dv);
+    let foot = t.foot(u + (v - u) * at);
+    (0..3).all(|k| foot.bary[k] > margins[k]).then_some(at)
+}
+
+/// [`ON_PLANE`] in barycentric terms at each corner: a point's coordinate
+/// `b_k` times twice the area over the opposite edge is its distance from
+/// that edge.
+fn edge_margins(t: &Triangle) -> [f32; 3] {
+    let corners = [t.corner, t.corner + t.e1, t.corner + t.e2];
+    std::array::from_fn(|k| {
+        let edge = corners[(k + 2) % 3].distance(corners[(k + 1) % 3]);
+        ON_PLANE * edge * t.inv_area2
+    })
+}
+
+/// How close to a triangle's plane or edges, in metres, a point counts as
+/// on them rather than on a side: 1 µm, far below any thickness and far
+/// above `f32` rounding at the scale of a cloth.
+pub const ON_PLANE: f32 = 1e-6;
+
+/// The grid's edges (weft, warp, and the diagonal that splits each cell into
+/// its two triangles) that leave particle `p` towards higher indices, then
+/// towards lower ones: every edge of the triangle mesh at `p`.
+#[inline]
+fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
+    let (w, h) = (spec.weft, spec.warp);
+    let (i, j) = (p % w, p / w);
+    let (right, up, left, down) = (i + 1 < w, j + 1 < h, i > 0, j > 0);
+    [
+        (right, p.wrapping_add(1)),
+        (up, p.wrapping_add(w)),
+        (right && up, p.wrapping_add(w + 1)),
+        (left, p.wrapping_sub(1)),
+        (down, p.wrapping_sub(w)),
+        (left && down, p.wrapping_sub(w + 1)),
+    ]
+    .into_iter()
+    .filter_map(|(there, o)| there.then_some(o))
+}
+
+/// How many (edge, triangle) pairs of the cloth's mesh cross, among pairs
+/// that share no particle: 0 for a cloth that does not pass through itself.
+/// Each crossing is found from the edge's end nearer the crossing point,
+/// which lies within half the longest edge of the triangle's box.
+pub fn crossings(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> usize {
+    let mut count = 0;
+    scan_crossings(x, triangles, spec, None, |_, _| count += 1);
+    count
+}
+
+impl SelfContacts {
+    /// Finds which particles are tangled at positions `x`, the ends of the
+    /// edges that cross a triangle and the triangle's corners, and returns
+    /// how many (edge, triangle) pairs cross ([`crossings`]). The near
+    /// pairs of the last substep are the candidates while they still cover
+    /// `x`; the result is the same either way.
+    pub(crate) fn find_tangles(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+    ) -> usize {
+        self.tangled.clear();
+        self.tangled.resize(x.len(), false);
+        let tangled = &mut self.tangled;
+        let mut count = 0;
+        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri| {
+            count += 1;
+            for k in edge.into_iter().chain(tri) {
+                tangled[k as usize] = true;
+            }
+        });
+        count
+    }
+
+    /// Leaves tangled particles out of the contacts for the next `substeps`
+    /// substeps.
+    pub(crate) fn watch_for_tangles(&mut self, substeps: u32) {
+        self.watch = self.watch.max(substeps);
+    }
+
+    /// Whether this substep leaves tangled particles out of the contacts:
+    /// while a watch is on ([`SelfContacts::watch_for_tangles`]; this call
+    /// counts one substep of it).
+    pub(crate) fn leave_tangles_this_substep(&mut self) -> bool {
+        self.leaving = self.watch > 0;
+        self.watch = self.watch.saturating_sub(1);
+        self.leaving
+    }
+}
+
+/// The hash's cells for counting crossings: a cell's rest diagonal, about
+/// one triangle. (Cells sized from the longest edge would hold the whole
+/// cloth once one edge is pulled long; small cells keep a query's cost to
+/// the particles really near.)
+fn crossing_cell(spec: &ClothSpec) -> f32 {
+    let (dx, dy) = spec.spacing();
+    dx.hypot(dy)
+}
+
+/// Calls `crossing(edge, triangle)` for every (edge, triangle) pair that
+/// crosses ([`crossings`]). Each crossing is found from the edge's nearer
+/// end `p`, which lies within half the edge `|po|` of the crossing point,
+/// and so of the triangle's box: the candidates for a triangle are the
+/// particles in its box grown by half the longest edge. Particles with an
+/// edge longer than a cell's rest diagonal (pulled long by a jerk) are
+/// checked against every triangle instead, so that one long edge does not
+/// grow every query to the whole cloth. The candidates come from `near`
+/// while its pairs cover that growth, else from a new hash.
+fn scan_crossings(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    spec: &ClothSpec,
+    near: Option<&NearTriangles>,
+    mut crossing: impl FnMut([u32; 2], [u32; 3]),
+) {
+    // Half the longest edge at each particle.
+    let half: Vec<f32> = (0..x.len() as u32)
+        .map(|p| {
+            let xp = x[p as usize];
+            edges_at(p, spec).fold(0.0f32, |m, o| m.max(xp.distance(x[o as usize])))
+        })
+        .map(|l| 0.5 * l)
+        .collect();
+    let longest = half.iter().copied().fold(0.0f32, f32::max);
+    if longest <= 0.0 || !longest.is_finite() {
+        return;
+    }
+    let grow = longest.min(crossing_cell(spec));
+    let near = near.filter(|n| n.covers(x, grow));
+    let mut hash = SpatialHash::default();
+    if near.is_none() {
+        hash.build(x, crossing_cell(spec));
+    }
+    for (k, &tri) in triangles.iter().enumerate() {
+        let Some(mut t) = TriangleCrossing::new(x, tri) else {
+            continue;
+        };
+        let (lo, hi) = (t.lo - Vec3::splat(grow), t.hi + Vec3::splat(grow));
+        let mut visit = |p: u32| {
+            if half[p as usize] > grow {
+                return; // in the pass below
+            }
+            let xp = x[p as usize];
+            if xp.cmpge(lo).all() && xp.cmple(hi).all() {
+                t.edges_from(p, x, spec, &mut crossing);
+            }
+        };
+        match near {
+            Some(n) => n.of(k).iter().copied().for_each(&mut visit),
+            None => hash.query(lo, hi, &mut visit),
+        }
+    }
+    let far: Vec<u32> = (0..x.len() as u32)
+        .filter(|&p| half[p as usize] > grow)
+        .collect();
+    if far.is_empty() {
+        return;
+    }
+    for &tri in triangles {
+        let Some(mut t) = TriangleCrossing::new(x, tri) else {
+            continue;
+        };
+        for &p in &far {
+            t.edges_from(p, x, spec, &mut crossing);
+        }
+    }
+}
+
+/// A triangle, with what counting the edges that cross it needs.
+struct TriangleCrossing {
+    corners: [u32; 3],
+    t: Triangle,
+    /// Its bounding box.
+    lo: Vec3,
+    hi: Vec3,
+    /// [`edge_margins`], once needed.
+    margins: Option<[f32; 3]>,
+}
+
+impl TriangleCrossing {
+    /// The triangle with corners `tri`; `None` if it is degenerate.
+    fn new(x: &[Vec3], tri: [u32; 3]) -> Option<Self> {
+        let c = tri.map(|k| x[k as usize]);
+        let (lo, hi) = bounds(c, 0.0);
+        Some(Self {
+            corners: tri,
+            t: Triangle::new(c)?,
+            lo,
+            hi,
+            margins: None,
+        })
+    }
+
+    /// Calls `crossing` for every edge of particle `p` that crosses the
+    /// triangle, `p` being its nearer end (or as near, and the lower index),
+    /// so that each crossing is counted once.
+    #[inline]
+    fn edges_from(
+        &mut self,
+        p: u32,
+        x: &[Vec3],
+        spec: &ClothSpec,
+        crossing: &mut impl FnMut([u32; 2], [u32; 3]),
+    ) {
+        let tri = self.corners;
+        if tri.contains(&p) {
+            return;
+        }
+        let xp = x[p as usize];
+        let dp = self.t.distance(xp);
+        if dp.abs() <= ON_PLANE {
+            return;
+        }
+        for o in edges_at(p, spec) {
+            let xo = x[o as usize];
+            let d_o = self.t.distance(xo);
+            if dp * d_o >= 0.0
+                || dp.abs() > d_o.abs()
+                || (dp.abs() == d_o.abs() && p > o)
+                || tri.contains(&o)
+            {
+                continue;
+            }
+            let half = Vec3::splat(0.5 * xp.distance(xo));
+            if !(xp.cmpge(self.lo - half).all() && xp.cmple(self.hi + half).all()) {
+                continue;
+            }
+            let t = &self.t;
+            let margins = self.margins.get_or_insert_with(|| edge_margins(t));
+            if crosses_at(xp, xo, (dp, d_o), t, margins).is_some() {
+                crossing([p, o], tri);
+            }
+        }
+    }
+}
