@@ -17,6 +17,14 @@ fn sets(s: &[&str]) -> Vec<Override> {
     s.iter().map(|s| s.parse().unwrap()).collect()
 }
 
+/// A run of preset `name` with `--set` overrides, streaming to `rec`.
+fn start_run(name: &str, overrides: &[&str], rec: rerun::RecordingStream) -> Run {
+    let loaded = load::load(name, &sets(overrides)).unwrap();
+    let scene = Scene::new(&loaded.preset).unwrap();
+    let telemetry = Telemetry::new(rec, loaded.preset.telemetry);
+    Run::start(scene, telemetry, name, &loaded.resolved).unwrap()
+}
+
 /// Records `frames` frames of `name` into `path` in-process; `between` runs
 /// before every step (to change parameters, say).
 fn record_to(
@@ -26,18 +34,10 @@ fn record_to(
     frames: u64,
     mut between: impl FnMut(&mut Run),
 ) -> Figures {
-    let loaded = load::load(name, &sets(overrides)).unwrap();
-    let scene = Scene::new(&loaded.preset).unwrap();
     let rec = rerun::RecordingStreamBuilder::new("weft-test")
         .save(path)
         .unwrap();
-    let mut run = Run::start(
-        scene,
-        Telemetry::new(rec, loaded.preset.telemetry),
-        name,
-        &loaded.resolved,
-    )
-    .unwrap();
+    let mut run = start_run(name, overrides, rec);
     for _ in 0..frames {
         between(&mut run);
         run.step().unwrap();
@@ -271,11 +271,8 @@ fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
 #[test]
 fn log_every_tracks_corrections_only_for_the_frames_it_logs() {
     let start = |every: &str| {
-        let overrides = sets(&["telemetry.level=\"full\"", every]);
-        let loaded = load::load("windy_flag", &overrides).unwrap();
-        let scene = Scene::new(&loaded.preset).unwrap();
-        let telemetry = Telemetry::new(rerun::RecordingStream::disabled(), loaded.preset.telemetry);
-        Run::start(scene, telemetry, "windy_flag", &loaded.resolved).unwrap()
+        let overrides = ["telemetry.level=\"full\"", every];
+        start_run("windy_flag", &overrides, rerun::RecordingStream::disabled())
     };
     let (mut all, mut thin) = (
         start("telemetry.log_every=1"),
@@ -409,18 +406,10 @@ fn ctrl_c_closes_the_file_with_every_frame_logged() {
 fn solver_failure_is_logged_at_its_frame_and_the_file_closed() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("fail.rrd");
-    let loaded = load::load("hanging_sheet", &sets(&["telemetry.level=\"summary\""])).unwrap();
     let rec = rerun::RecordingStreamBuilder::new("weft-test")
         .save(&path)
         .unwrap();
-    let scene = Scene::new(&loaded.preset).unwrap();
-    let mut run = Run::start(
-        scene,
-        Telemetry::new(rec, loaded.preset.telemetry),
-        "hanging_sheet",
-        &loaded.resolved,
-    )
-    .unwrap();
+    let mut run = start_run("hanging_sheet", &["telemetry.level=\"summary\""], rec);
     run.run(3, &AtomicBool::new(false), |_| {}).unwrap();
     // Poison one free particle: its next update is not finite.
     run.scene.solver_mut().state_mut().prev_position[40].x = f32::NAN;

@@ -18,7 +18,7 @@ use crate::scene::{
     Scene,
     preset::{ColliderSection, ShapeKind},
 };
-use crate::solver::Pose;
+use crate::solver::{Pose, Shape};
 
 /// The side of a plane's patch, in units of the cloth's larger side.
 const GROUND_SPAN: f32 = 3.0;
@@ -88,28 +88,26 @@ pub fn log_static(rec: &RecordingStream, scene: &Scene) -> RecordingStreamResult
 }
 
 /// Logs each plane's patch under the cloth whose particles are at `x`
-/// (the time already set).
+/// (the time already set), where the solver has the plane now.
 pub fn log_planes(rec: &RecordingStream, scene: &Scene, x: &[Vec3]) -> RecordingStreamResult<()> {
-    let planes = scene.preset().colliders.iter().enumerate();
+    // The solver's colliders are the preset's, in its order.
+    let solver = scene.solver();
+    let planes = solver.colliders().iter().zip(&scene.preset().colliders);
     let mut planes = planes
-        .filter(|(_, c)| c.shape == ShapeKind::Plane)
+        .enumerate()
+        .filter(|(_, (c, _))| c.shape == Shape::Plane)
         .peekable();
     if planes.peek().is_none() {
         return Ok(());
     }
-    let spec = scene.solver().spec();
+    let spec = solver.spec();
     let half = 0.5 * GROUND_SPAN * spec.width.max(spec.height);
     let centre = centre(x);
-    for (k, c) in planes {
-        let local = Pose::new(c.position, crate::scene::preset::euler(c.rotation));
-        let body = c.body.as_ref().and_then(|name| {
-            let i = scene.body_names().position(|b| b == name)?;
-            scene.body_poses().get(i).copied()
-        });
-        let world = body.map_or(local, |b| b.compose(&local));
-        let corners = patch(&local, world.inverse_transform_point(centre), half);
+    for (k, (c, section)) in planes {
+        let world = c.world_pose(solver.bodies());
+        let corners = patch(&c.pose, world.inverse_transform_point(centre), half);
         rec.log(
-            path(c, k),
+            path(section, k),
             &rerun::Mesh3D::update_fields().with_vertex_positions(corners),
         )?;
     }
