@@ -310,6 +310,53 @@ fn per_particle_self_violation_agrees_with_the_figures() {
     }
 }
 
+/// Inspecting one particle measures only the constraints that involve it,
+/// and reads the same as the whole cloth's per-particle values, bit for
+/// bit, for every family, with self-collision on and off.
+#[test]
+fn one_particle_s_readout_matches_the_whole_cloth_s() {
+    for weight in [0.0, 1.0] {
+        let params = Params {
+            weights: Weights::default().with(Family::SelfCollision, weight),
+            ..Params::default()
+        };
+        let mut s = folded(0.004, params);
+        // Move and tilt every element a little, each its own way, so that
+        // every family is violated somewhere (the layers stay inside the
+        // thickness).
+        let st = s.state_mut();
+        for k in 0..st.len() {
+            let along = Vec3::new((k % 3) as f32 - 1.0, (k % 5) as f32 - 2.0, 1.0);
+            st.position[k] += 2e-4 * along;
+            st.orientation[k] =
+                (glam::Quat::from_scaled_axis(0.05 * along) * st.orientation[k]).normalize();
+        }
+        let strain = s.particle_strain();
+        assert!(strain.iter().any(|v| *v > 0.0), "some edge is stretched");
+        for f in Family::ALL {
+            let each = s.particle_violation(f);
+            assert!(
+                f == Family::SelfCollision && weight == 0.0 || each.iter().any(|v| *v > 0.0),
+                "{f:?} is violated somewhere"
+            );
+            for (i, v) in each.iter().enumerate() {
+                assert_eq!(
+                    s.particle_violation_at(f, i).to_bits(),
+                    v.to_bits(),
+                    "{f:?}, particle {i}, weight {weight}"
+                );
+            }
+        }
+        for (i, v) in strain.iter().enumerate() {
+            assert_eq!(
+                s.particle_strain_at(i).to_bits(),
+                v.to_bits(),
+                "particle {i}"
+            );
+        }
+    }
+}
+
 #[test]
 fn a_layer_carried_through_is_pushed_back_to_its_side() {
     // Both layers start apart; the upper one arrives moving down so fast

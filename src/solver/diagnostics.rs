@@ -27,7 +27,7 @@ use super::{
     constraints::{Particles, Recorder, Shared, atan2},
     family::{Family, PerFamily},
     team::Crew,
-    topology::Topology,
+    topology::{Pair, Topology},
 };
 
 /// Max and RMS of a family's violation over its pairs.
@@ -369,16 +369,36 @@ pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
 /// Per particle, the largest strain of its weft and warp edges, as in
 /// [`max_strain`] (0 when all are compressed).
 pub fn particle_strain(state: &ClothState, topology: &Topology) -> Vec<f32> {
-    let x = &state.position;
     let mut out = vec![0.0f32; state.len()];
-    for p in &topology.structural.items {
-        let len = x[p.b as usize].distance(x[p.a as usize]);
-        let s = ((len - p.rest) / p.rest).max(0.0);
+    for (p, s) in edge_strains(state, topology, None) {
         for i in [p.a as usize, p.b as usize] {
             out[i] = out[i].max(s);
         }
     }
     out
+}
+
+/// Particle `i`'s entry of [`particle_strain`], the same bit for bit, from
+/// its own edges alone (for inspecting one particle).
+pub fn particle_strain_at(state: &ClothState, topology: &Topology, i: usize) -> f32 {
+    edge_strains(state, topology, Some(i as u32)).fold(0.0, |m, (_, s)| m.max(s))
+}
+
+/// Each weft and warp edge with its strain (0 when compressed); given
+/// `only`, the edges of that particle alone.
+fn edge_strains<'a>(
+    state: &'a ClothState,
+    topology: &'a Topology,
+    only: Option<u32>,
+) -> impl Iterator<Item = (&'a Pair, f32)> {
+    let x = &state.position;
+    let edges = topology.structural.items.iter();
+    edges
+        .filter(move |p| only.is_none_or(|i| p.a == i || p.b == i))
+        .map(|p| {
+            let len = x[p.b as usize].distance(x[p.a as usize]);
+            (p, ((len - p.rest) / p.rest).max(0.0))
+        })
 }
 
 #[cfg(test)]

@@ -602,22 +602,64 @@ pub fn violations(
 
 /// Per particle, the largest violation of `family` over the constraints
 /// that involve it (pairs: both ends; bend triples: all three), as in
-/// [`violation`]. For inspecting one particle.
+/// [`violation`]. For colouring or labelling every particle.
 pub fn particle_violation(
     family: Family,
     state: &ClothState,
     topology: &Topology,
     spec: &ClothSpec,
 ) -> Vec<f32> {
-    let x = &state.position;
-    let normal = |i| state.normal(i);
     let mut out = vec![0.0f32; state.len()];
-    let mut put = |i: u32, v: f32| {
+    each_violation(family, state, topology, spec, None, &mut |i, v| {
         let slot = &mut out[i as usize];
         *slot = slot.max(v);
-    };
+    });
+    out
+}
+
+/// Particle `i`'s entry of [`particle_violation`], the same bit for bit,
+/// from the constraints that involve `i` alone (for inspecting one
+/// particle: the others are not measured).
+pub fn particle_violation_at(
+    family: Family,
+    state: &ClothState,
+    topology: &Topology,
+    spec: &ClothSpec,
+    i: usize,
+) -> f32 {
+    let mut largest = 0.0f32;
+    each_violation(
+        family,
+        state,
+        topology,
+        spec,
+        Some(i as u32),
+        &mut |j, v| {
+            if j as usize == i {
+                largest = largest.max(v);
+            }
+        },
+    );
+    largest
+}
+
+/// Calls `put(i, v)` for every particle `i` of every constraint of `family`
+/// with the constraint's violation `v`; given `only`, measures only the
+/// constraints that involve that particle (self-collision's contact search
+/// still runs over the whole cloth).
+fn each_violation(
+    family: Family,
+    state: &ClothState,
+    topology: &Topology,
+    spec: &ClothSpec,
+    only: Option<u32>,
+    put: &mut dyn FnMut(u32, f32),
+) {
+    let x = &state.position;
+    let normal = |i| state.normal(i);
+    let wanted = |members: &[u32]| only.is_none_or(|i| members.contains(&i));
     let mut pairs = |set: &Batched<Pair>, f: &dyn Fn(Pair) -> f32| {
-        for &p in &set.items {
+        for &p in set.items.iter().filter(|p| wanted(&[p.a, p.b])) {
             let v = f(p);
             put(p.a, v);
             put(p.b, v);
@@ -630,7 +672,12 @@ pub fn particle_violation(
         }),
         Family::Normality => pairs(&topology.structural, &|p| normality::violation(normal, p)),
         Family::Curvature => {
-            for &t in &topology.bend.items {
+            for &t in topology
+                .bend
+                .items
+                .iter()
+                .filter(|t| wanted(&[t.a, t.mid, t.b]))
+            {
                 let v = curvature::violation(x, t);
                 put(t.a, v);
                 put(t.mid, v);
@@ -645,5 +692,4 @@ pub fn particle_violation(
             });
         }
     }
-    out
 }

@@ -446,9 +446,25 @@ impl Solver {
         family::particle_violation(family, &self.state, &self.topology, &self.spec)
     }
 
+    /// Particle `i`'s entry of [`Solver::particle_violation`], measured on
+    /// the constraints that involve it alone: what inspecting one particle
+    /// needs, at a fraction of the cost.
+    pub fn particle_violation_at(&self, family: Family, i: usize) -> f32 {
+        if family == Family::SelfCollision && !self.self_collision_on() {
+            return 0.0;
+        }
+        family::particle_violation_at(family, &self.state, &self.topology, &self.spec, i)
+    }
+
     /// Per particle, the largest strain of its weft and warp edges.
     pub fn particle_strain(&self) -> Vec<f32> {
         diagnostics::particle_strain(&self.state, &self.topology)
+    }
+
+    /// Particle `i`'s entry of [`Solver::particle_strain`], from its own
+    /// edges alone.
+    pub fn particle_strain_at(&self, i: usize) -> f32 {
+        diagnostics::particle_strain_at(&self.state, &self.topology, i)
     }
 
     /// How many edges of the cloth's mesh cross a triangle they share no

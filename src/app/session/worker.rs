@@ -462,13 +462,13 @@ fn readout(scene: &Scene, i: usize) -> ParticleReadout {
     let mut r = ParticleReadout {
         index: i,
         cell: (i as u32 % weft, i as u32 / weft),
-        strain: solver.particle_strain()[i],
+        strain: solver.particle_strain_at(i),
         ..ParticleReadout::default()
     };
     let corrections = solver.diagnostics().filter(|d| d.corrections);
     r.corrections = corrections.is_some();
     for f in Family::ALL {
-        r.violation[f] = solver.particle_violation(f)[i];
+        r.violation[f] = solver.particle_violation_at(f, i);
         if let Some(d) = corrections {
             r.dx[f] = d.family(f).dx[i];
             r.dtheta[f] = d.family(f).dtheta[i];
