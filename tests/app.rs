@@ -612,6 +612,8 @@ fn the_inspector_shows_the_selected_particle() {
     ] {
         assert!(components.contains(c), "{c} not in {components:?}");
     }
+    // Stretch never turns an element: it has no δθ to show.
+    assert!(!components.contains("dtheta_stretch"), "{components:?}");
 }
 
 /// The panel shows each [expect] bound with the run's value and ok/FAIL,

@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | `world` | Z-up view coordinates | static |
 //! | `world/cloth/particles` | points, coloured by `color_by` | summary |
-//! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` | full, with `set_particle_values` (the debugger) |
+//! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` (families that turn), as `f32` | full, with `set_particle_values` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
@@ -434,33 +434,31 @@ impl Telemetry {
 
     /// Per-particle values beside the points, so hovering a particle in the
     /// viewer shows them: strain, each family's violation, and the length
-    /// of each family's δx (m) and δθ (rad) in the last adjust.
+    /// of each family's δx (m) and δθ (rad) in the last adjust (δθ only for
+    /// the families that turn elements). Single precision, as the solver
+    /// computes them.
     fn log_particle_values(&self, scene: &Scene) -> RecordingStreamResult<()> {
         let solver = scene.solver();
-        let scalars = |v: Vec<f32>| v.into_iter().map(f64::from).collect::<Vec<f64>>();
-        let mut values = rerun::AnyValues::default().with_component::<rerun::components::Scalar>(
-            "strain",
-            scalars(solver.particle_strain()),
-        );
+        let mut values = rerun::AnyValues::default()
+            .with_component_from_data("strain", f32s(solver.particle_strain()));
         for f in Family::ALL {
-            values = values.with_component::<rerun::components::Scalar>(
+            values = values.with_component_from_data(
                 particle_component("violation", f),
-                scalars(solver.particle_violation(f)),
+                f32s(solver.particle_violation(f)),
             );
         }
         if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
+            let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
             for f in Family::ALL {
                 let fd = d.family(f);
-                let len = |v: &[Vec3]| v.iter().map(|v| v.length() as f64).collect::<Vec<_>>();
-                values = values
-                    .with_component::<rerun::components::Scalar>(
-                        particle_component("dx", f),
-                        len(&fd.dx),
-                    )
-                    .with_component::<rerun::components::Scalar>(
+                values =
+                    values.with_component_from_data(particle_component("dx", f), lengths(&fd.dx));
+                if f.turns() {
+                    values = values.with_component_from_data(
                         particle_component("dtheta", f),
-                        len(&fd.dtheta),
+                        lengths(&fd.dtheta),
                     );
+                }
             }
         }
         self.rec.log(paths::PARTICLES, &values)
@@ -492,6 +490,11 @@ impl Telemetry {
     pub fn flush(&self) -> Result<(), rerun::sink::SinkFlushError> {
         self.rec.flush_blocking()
     }
+}
+
+/// A batch of single-precision values, one per particle.
+fn f32s(values: Vec<f32>) -> rerun::external::arrow::array::ArrayRef {
+    std::sync::Arc::new(rerun::external::arrow::array::Float32Array::from(values))
 }
 
 /// A per-family component on the particles entity: `violation_stretch`,
