@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use weft::record::{Figures, Run};
+use weft::scene::preset::Level;
 use weft::scene::{Override, Scene, load, shipped};
 use weft::solver::Family;
 use weft::telemetry::{Telemetry, paths, read};
@@ -100,16 +101,20 @@ fn every_preset_records_and_reads_back() {
                     p.name
                 );
             }
-            assert!(
-                rec.entities.contains_key(&paths::correction(f, "dx")),
-                "{}: no δx for {f:?}",
-                p.name
-            );
-            assert!(
-                rec.entities.contains_key(&paths::correction(f, "dtheta")),
-                "{}: no δθ for {f:?}",
-                p.name
-            );
+            // A family's arrows are logged from the first frame that has
+            // some to draw.
+            for kind in ["dx", "dtheta"] {
+                if let Some(e) = rec.entities.get(&paths::correction(f, kind)) {
+                    assert!(e.lengths[0] > 0, "{}: {f:?} {kind} {:?}", p.name, e.lengths);
+                }
+            }
+            if !f.turns() {
+                assert!(
+                    !rec.entities.contains_key(&paths::correction(f, "dtheta")),
+                    "{}: δθ for {f:?}, which never turns",
+                    p.name
+                );
+            }
             assert!(rec.entities.contains_key(&paths::adjust_time(f)));
         }
         for path in [
@@ -223,6 +228,74 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
         !rec.entities
             .contains_key(&paths::correction(Family::Stretch, "dx"))
     );
+}
+
+/// The viewer shows each entity's latest data, so what level full drew is
+/// blanked once when a frame stops drawing it (a switch to summary, a
+/// family switched off), rather than left standing while the cloth moves
+/// on; and drawn again when full comes back.
+#[test]
+fn what_a_frame_no_longer_draws_is_blanked_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("switch.rrd");
+    let set_level = |run: &mut Run, level: Level| {
+        let mut t = *run.telemetry.settings();
+        t.level = level;
+        run.telemetry.set_settings(t);
+    };
+    record_to(
+        &path,
+        "hanging_sheet",
+        &["telemetry.level=\"full\""],
+        10,
+        |run| match run.scene.frame() + 1 {
+            6 => set_level(run, Level::Summary),
+            9 => set_level(run, Level::Full),
+            _ => {}
+        },
+    );
+    let rec = read::read(&path).unwrap();
+    let stretch = paths::correction(Family::Stretch, "dx");
+    let drawn = |rec: &read::Recording, entity: &str| -> Vec<bool> {
+        rec.entities[entity]
+            .lengths
+            .iter()
+            .map(|n| *n > 0)
+            .collect()
+    };
+    for entity in [paths::MESH, paths::NORMALS, stretch.as_str()] {
+        // Frame 0 has no corrections yet: nothing to draw or blank.
+        let frames = if entity == stretch {
+            vec![1, 2, 3, 4, 5, 6, 9, 10]
+        } else {
+            vec![0, 1, 2, 3, 4, 5, 6, 9, 10]
+        };
+        assert_eq!(rec.frames(entity), frames, "{entity}");
+        let mut expected = vec![true; frames.len()];
+        expected[frames.len() - 3] = false;
+        assert_eq!(drawn(&rec, entity), expected, "{entity}");
+    }
+    // The points go on at every frame.
+    assert_eq!(rec.frames(paths::PARTICLES), (0..=10).collect::<Vec<_>>());
+
+    // A family switched off blanks its arrows once, and logs nothing after.
+    let path = dir.path().join("family.rrd");
+    record_to(
+        &path,
+        "hanging_sheet",
+        &["telemetry.level=\"full\""],
+        6,
+        |run| {
+            if run.scene.frame() + 1 == 4 {
+                let mut t = *run.telemetry.settings();
+                t.corrections[Family::Stretch] = false;
+                run.telemetry.set_settings(t);
+            }
+        },
+    );
+    let rec = read::read(&path).unwrap();
+    assert_eq!(rec.frames(&stretch), vec![1, 2, 3, 4]);
+    assert_eq!(drawn(&rec, &stretch), vec![true, true, true, false]);
 }
 
 /// At level summary the scene around the cloth moves with it, so the

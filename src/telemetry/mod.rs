@@ -13,7 +13,7 @@
 //! | `world/cloth/mesh` | the cloth surface | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
-//! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows) | full |
+//! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows), families that turn | full |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
 //! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth (`colliders.rs`) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
@@ -42,7 +42,7 @@ use crate::scene::{
     Scene, Tuning,
     preset::{Level, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, Pose, Solver, StepError};
+use crate::solver::{Diagnostics, Family, PerFamily, Pose, Solver, StepError};
 
 /// How Rerun batches a recording written to a file (or a pipe): into
 /// chunks flushed every 200 ms (Rerun's default tick), not every 2 MiB.
@@ -101,6 +101,23 @@ pub struct Telemetry {
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
     particle_values: bool,
+    /// What the frames logged so far left on screen of what only level
+    /// full draws.
+    drawn: Drawn,
+}
+
+/// What of level full's drawing the viewer still shows: it shows each
+/// entity's latest data, so whatever a frame no longer draws (a family
+/// whose arrows all fell under the threshold, or everything of level full
+/// after a switch to summary) is logged once as empty, and not again.
+#[derive(Clone, Copy, Debug, Default)]
+struct Drawn {
+    /// The mesh's vertices and the normals.
+    surface: bool,
+    /// The per-particle hover values.
+    particle_values: bool,
+    /// Per family, its δx and δθ arrows.
+    arrows: PerFamily<[bool; 2]>,
 }
 
 impl Telemetry {
@@ -113,6 +130,7 @@ impl Telemetry {
             last_poses: Vec::new(),
             last_cost: Duration::ZERO,
             particle_values: false,
+            drawn: Drawn::default(),
         }
     }
 
@@ -303,6 +321,7 @@ impl Telemetry {
     pub fn forget(&mut self) {
         self.last_tuning = None;
         self.last_poses.clear();
+        self.drawn = Drawn::default();
     }
 
     /// Logs an informational event at `frame`.
@@ -403,12 +422,15 @@ impl Telemetry {
                 &batch::arrows(x, &normals, 2.0 * radius, |_| true)
                     .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
             )?;
+            self.drawn.surface = true;
             if let Some(d) = diag {
                 self.log_corrections(x, d)?;
             }
             if self.particle_values {
                 self.log_particle_values(scene)?;
             }
+        } else {
+            self.blank_full()?;
         }
         self.log_bodies(scene)?;
         self.last_cost = start.elapsed();
@@ -437,7 +459,7 @@ impl Telemetry {
     /// of each family's δx (m) and δθ (rad) in the last adjust (δθ only for
     /// the families that turn elements). Single precision, as the solver
     /// computes them.
-    fn log_particle_values(&self, scene: &Scene) -> RecordingStreamResult<()> {
+    fn log_particle_values(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
         let solver = scene.solver();
         let mut values = rerun::AnyValues::default()
             .with_component_from_data("strain", f32s(solver.particle_strain()));
@@ -461,27 +483,73 @@ impl Telemetry {
                 }
             }
         }
+        self.drawn.particle_values = true;
         self.rec.log(paths::PARTICLES, &values)
     }
 
-    fn log_corrections(&self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
+    /// Each family's δx and δθ arrows of at least the threshold's length,
+    /// none for a family switched off. A family with none to draw logs
+    /// nothing, unless it drew some at the last frame: then its empty
+    /// batch clears them.
+    fn log_corrections(&mut self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
             let shown = self.settings.corrections[f];
-            for (kind, vectors) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)] {
-                // A family switched off logs empty arrows, clearing its old ones.
+            for (k, (kind, vectors)) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)]
+                .into_iter()
+                .enumerate()
+            {
                 let arrows = batch::arrows(x, vectors, scale, |v| {
                     shown && {
                         let len = v.length();
                         len >= threshold && len > 0.0
                     }
                 });
-                self.rec.log(
+                let any = arrows.vectors.as_ref().is_some_and(|v| !v.array.is_empty());
+                if any || self.drawn.arrows[f][k] {
+                    self.rec.log(
+                        paths::correction(f, kind),
+                        &arrows.with_colors([color::family(f)]),
+                    )?;
+                }
+                self.drawn.arrows[f][k] = any;
+            }
+        }
+        Ok(())
+    }
+
+    /// Logs as empty what level full drew at the last frame and this frame
+    /// does not: the mesh's vertices, the normals, the correction arrows
+    /// and the hover values (the mesh's triangles stay: they are static).
+    fn blank_full(&mut self) -> RecordingStreamResult<()> {
+        let rec = &self.rec;
+        let drawn = std::mem::take(&mut self.drawn);
+        if drawn.surface {
+            rec.log(paths::MESH, &batch::mesh_update(&[], &[]))?;
+            rec.log(paths::NORMALS, &batch::arrows(&[], &[], 1.0, |_| true))?;
+        }
+        for (f, kinds) in drawn.arrows.iter() {
+            for (kind, _) in ["dx", "dtheta"].into_iter().zip(kinds).filter(|(_, d)| **d) {
+                rec.log(
                     paths::correction(f, kind),
-                    &arrows.with_colors([color::family(f)]),
+                    &batch::arrows(&[], &[], 1.0, |_| true),
                 )?;
             }
+        }
+        if drawn.particle_values {
+            let none = || f32s(Vec::new());
+            let mut values = rerun::AnyValues::default().with_component_from_data("strain", none());
+            for f in Family::ALL {
+                values = values
+                    .with_component_from_data(particle_component("violation", f), none())
+                    .with_component_from_data(particle_component("dx", f), none());
+                if f.turns() {
+                    values =
+                        values.with_component_from_data(particle_component("dtheta", f), none());
+                }
+            }
+            rec.log(paths::PARTICLES, &values)?;
         }
         Ok(())
     }
