@@ -343,9 +343,13 @@ fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
 /// frame holds is the same bit for bit as with every frame logged.
 #[test]
 fn log_every_tracks_corrections_only_for_the_frames_it_logs() {
+    // Into memory: a disabled stream logs no frame at all.
     let start = |every: &str| {
         let overrides = ["telemetry.level=\"full\"", every];
-        start_run("windy_flag", &overrides, rerun::RecordingStream::disabled())
+        let (rec, _storage) = rerun::RecordingStreamBuilder::new("weft-test")
+            .memory()
+            .unwrap();
+        start_run("windy_flag", &overrides, rec)
     };
     let (mut all, mut thin) = (
         start("telemetry.log_every=1"),
@@ -384,6 +388,37 @@ fn log_every_tracks_corrections_only_for_the_frames_it_logs() {
         }
     }
     assert!(moved, "the flag's families move it");
+}
+
+/// Without an output nothing is logged (nor tracked for logging), and Rerun
+/// has nothing to warn about: the report and the note alone.
+#[test]
+fn a_run_without_an_output_logs_nothing_and_says_so() {
+    let out = weft()
+        .args(["record", "windy_flag", "--frames", "5", "--level", "full"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("the telemetry is not kept"), "{err}");
+    assert!(!err.contains("WARN"), "{err}");
+    assert!(out.stdout.is_empty());
+
+    let mut run = start_run(
+        "windy_flag",
+        &["telemetry.level=\"full\""],
+        rerun::RecordingStream::disabled(),
+    );
+    run.step().unwrap();
+    let d = run.scene.solver().diagnostics().unwrap();
+    assert!(
+        !d.corrections,
+        "corrections tracked for a stream that keeps nothing"
+    );
+    assert!(
+        d.max_strain > 0.0,
+        "the figures are measured for the verdict"
+    );
 }
 
 #[test]

@@ -187,12 +187,18 @@ impl Telemetry {
         }
     }
 
-    /// Whether frame `frame` is logged.
+    /// Whether frame `frame` is logged: never into a disabled stream
+    /// (`weft record` without an output), where nothing is kept.
     pub fn logs_frame(&self, frame: u64) -> bool {
-        self.settings.level != Level::Off && frame.is_multiple_of(self.settings.log_every as u64)
+        self.settings.level != Level::Off
+            && frame.is_multiple_of(self.settings.log_every as u64)
+            && self.rec.is_enabled()
     }
 
     fn set_time(&self, frame: u64, time: f64) {
+        if !self.rec.is_enabled() {
+            return; // Rerun would warn that it ignores the time.
+        }
         self.rec.set_time_sequence(paths::FRAME, frame as i64);
         self.rec.set_duration_secs(paths::SIM_TIME, time);
     }
@@ -200,6 +206,9 @@ impl Telemetry {
     /// Logs what never changes: version, resolved preset, topology, colliders
     /// and series styles. Call once, before the first frame.
     pub fn log_static(&self, scene: &Scene, resolved_preset: &str) -> RecordingStreamResult<()> {
+        if !self.rec.is_enabled() {
+            return Ok(());
+        }
         let rec = &self.rec;
         rec.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
         rec.log_static(
@@ -556,6 +565,9 @@ impl Telemetry {
 
     /// Flushes everything logged so far (to the file or viewer).
     pub fn flush(&self) -> Result<(), rerun::sink::SinkFlushError> {
+        if !self.rec.is_enabled() {
+            return Ok(()); // Nothing to flush; Rerun would warn.
+        }
         self.rec.flush_blocking()
     }
 }
