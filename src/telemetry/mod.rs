@@ -1,7 +1,7 @@
 //! Telemetry: what a running scene streams to Rerun.
 //!
 //! The solver knows nothing of Rerun; this module reads the scene and the
-//! solver's [`Diagnostics`] and logs them, in a
+//! solver's [`Diagnostics`](crate::solver::Diagnostics) and logs them, in a
 //! few batched entities per frame (never one entity per particle). Entity
 //! paths ([`paths`]):
 //!
@@ -10,7 +10,7 @@
 //! | `world` | Z-up view coordinates | static |
 //! | `world/cloth/particles` | points, coloured by `color_by` | summary |
 //! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` (families that turn), as `f32` | full, with `set_particle_values` (the debugger) |
-//! | `world/cloth/mesh` | the cloth surface | full |
+//! | `world/cloth/mesh` | the cloth surface (`full.rs`, with the normals, the corrections and the hover values) | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows), families that turn | full |
@@ -28,21 +28,24 @@
 
 mod batch;
 pub mod blueprint;
+mod changes;
 mod colliders;
 pub mod color;
+mod full;
 pub mod paths;
 pub mod read;
 
+pub use changes::describe_changes;
+
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
 use rerun::{RecordingStream, RecordingStreamResult};
 
 use crate::scene::{
     Scene, Tuning,
     preset::{Level, TelemetrySettings},
 };
-use crate::solver::{Diagnostics, Family, PerFamily, Pose, Solver, StepError};
+use crate::solver::{Family, Pose, Solver, StepError};
 
 /// How Rerun batches a recording written to a file (or a pipe): into
 /// chunks flushed every 200 ms (Rerun's default tick), not every 2 MiB.
@@ -103,21 +106,7 @@ pub struct Telemetry {
     particle_values: bool,
     /// What the frames logged so far left on screen of what only level
     /// full draws.
-    drawn: Drawn,
-}
-
-/// What of level full's drawing the viewer still shows: it shows each
-/// entity's latest data, so whatever a frame no longer draws (a family
-/// whose arrows all fell under the threshold, or everything of level full
-/// after a switch to summary) is logged once as empty, and not again.
-#[derive(Clone, Copy, Debug, Default)]
-struct Drawn {
-    /// The mesh's vertices and the normals.
-    surface: bool,
-    /// The per-particle hover values.
-    particle_values: bool,
-    /// Per family, its δx and δθ arrows.
-    arrows: PerFamily<[bool; 2]>,
+    drawn: full::Drawn,
 }
 
 impl Telemetry {
@@ -130,7 +119,7 @@ impl Telemetry {
             last_poses: Vec::new(),
             last_cost: Duration::ZERO,
             particle_values: false,
-            drawn: Drawn::default(),
+            drawn: full::Drawn::default(),
         }
     }
 
@@ -330,7 +319,7 @@ impl Telemetry {
     pub fn forget(&mut self) {
         self.last_tuning = None;
         self.last_poses.clear();
-        self.drawn = Drawn::default();
+        self.drawn = full::Drawn::default();
     }
 
     /// Logs an informational event at `frame`.
@@ -424,20 +413,7 @@ impl Telemetry {
         colliders::log_planes(rec, scene, x)?;
 
         if self.settings.level == Level::Full {
-            let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
-            rec.log(paths::MESH, &batch::mesh_update(x, &normals))?;
-            rec.log(
-                paths::NORMALS,
-                &batch::arrows(x, &normals, 2.0 * radius, |_| true)
-                    .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
-            )?;
-            self.drawn.surface = true;
-            if let Some(d) = diag {
-                self.log_corrections(x, d)?;
-            }
-            if self.particle_values {
-                self.log_particle_values(scene)?;
-            }
+            self.log_full(scene, radius)?;
         } else {
             self.blank_full()?;
         }
@@ -463,106 +439,6 @@ impl Telemetry {
         Ok(())
     }
 
-    /// Per-particle values beside the points, so hovering a particle in the
-    /// viewer shows them: strain, each family's violation, and the length
-    /// of each family's δx (m) and δθ (rad) in the last adjust (δθ only for
-    /// the families that turn elements). Single precision, as the solver
-    /// computes them.
-    fn log_particle_values(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
-        let solver = scene.solver();
-        let mut values = rerun::AnyValues::default()
-            .with_component_from_data("strain", f32s(solver.particle_strain()));
-        for f in Family::ALL {
-            values = values.with_component_from_data(
-                particle_component("violation", f),
-                f32s(solver.particle_violation(f)),
-            );
-        }
-        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
-            let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
-            for f in Family::ALL {
-                let fd = d.family(f);
-                values =
-                    values.with_component_from_data(particle_component("dx", f), lengths(&fd.dx));
-                if f.turns() {
-                    values = values.with_component_from_data(
-                        particle_component("dtheta", f),
-                        lengths(&fd.dtheta),
-                    );
-                }
-            }
-        }
-        self.drawn.particle_values = true;
-        self.rec.log(paths::PARTICLES, &values)
-    }
-
-    /// Each family's δx and δθ arrows of at least the threshold's length,
-    /// none for a family switched off. A family with none to draw logs
-    /// nothing, unless it drew some at the last frame: then its empty
-    /// batch clears them.
-    fn log_corrections(&mut self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
-        let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
-        for f in Family::ALL {
-            let fd = d.family(f);
-            let shown = self.settings.corrections[f];
-            for (k, (kind, vectors)) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)]
-                .into_iter()
-                .enumerate()
-            {
-                let arrows = batch::arrows(x, vectors, scale, |v| {
-                    shown && {
-                        let len = v.length();
-                        len >= threshold && len > 0.0
-                    }
-                });
-                let any = arrows.vectors.as_ref().is_some_and(|v| !v.array.is_empty());
-                if any || self.drawn.arrows[f][k] {
-                    self.rec.log(
-                        paths::correction(f, kind),
-                        &arrows.with_colors([color::family(f)]),
-                    )?;
-                }
-                self.drawn.arrows[f][k] = any;
-            }
-        }
-        Ok(())
-    }
-
-    /// Logs as empty what level full drew at the last frame and this frame
-    /// does not: the mesh's vertices, the normals, the correction arrows
-    /// and the hover values (the mesh's triangles stay: they are static).
-    fn blank_full(&mut self) -> RecordingStreamResult<()> {
-        let rec = &self.rec;
-        let drawn = std::mem::take(&mut self.drawn);
-        if drawn.surface {
-            rec.log(paths::MESH, &batch::mesh_update(&[], &[]))?;
-            rec.log(paths::NORMALS, &batch::arrows(&[], &[], 1.0, |_| true))?;
-        }
-        for (f, kinds) in drawn.arrows.iter() {
-            for (kind, _) in ["dx", "dtheta"].into_iter().zip(kinds).filter(|(_, d)| **d) {
-                rec.log(
-                    paths::correction(f, kind),
-                    &batch::arrows(&[], &[], 1.0, |_| true),
-                )?;
-            }
-        }
-        if drawn.particle_values {
-            let none = || f32s(Vec::new());
-            let mut values = rerun::AnyValues::default().with_component_from_data("strain", none());
-            for f in Family::ALL {
-                values = values
-                    .with_component_from_data(particle_component("violation", f), none())
-                    .with_component_from_data(particle_component("dx", f), none());
-                if f.turns() {
-                    values =
-                        values.with_component_from_data(particle_component("dtheta", f), none());
-                }
-            }
-            rec.log(paths::PARTICLES, &values)?;
-        }
-        Ok(())
-    }
-
     /// Flushes everything logged so far (to the file or viewer).
     pub fn flush(&self) -> Result<(), rerun::sink::SinkFlushError> {
         if !self.rec.is_enabled() {
@@ -572,52 +448,6 @@ impl Telemetry {
     }
 }
 
-/// A batch of single-precision values, one per particle.
-fn f32s(values: Vec<f32>) -> rerun::external::arrow::array::ArrayRef {
-    std::sync::Arc::new(rerun::external::arrow::array::Float32Array::from(values))
-}
-
-/// A per-family component on the particles entity: `violation_stretch`,
-/// `dx_curvature`, …
-fn particle_component(kind: &str, f: Family) -> rerun::ComponentIdentifier {
-    rerun::ComponentIdentifier::try_new(format!("{kind}_{}", f.name())).expect("not empty")
-}
-
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
-}
-
-/// "solver.weights.curvature 0.1 → 0.3, solver.iterations 10 → 12".
-pub fn describe_changes(old: &Tuning, new: &Tuning) -> String {
-    let a: toml::Table = toml::Table::try_from(old).expect("tuning serializes");
-    let b: toml::Table = toml::Table::try_from(new).expect("tuning serializes");
-    let mut changes = Vec::new();
-    diff("", &a, &b, &mut changes);
-    if changes.is_empty() {
-        "none".into()
-    } else {
-        changes.join(", ")
-    }
-}
-
-/// A value as a person writes it: floats in their shortest `f32` form.
-fn short(v: &toml::Value) -> String {
-    match v {
-        toml::Value::Float(f) => (*f as f32).to_string(),
-        other => other.to_string(),
-    }
-}
-
-fn diff(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut Vec<String>) {
-    for (k, vb) in b {
-        let key = format!("{prefix}{k}");
-        match (a.get(k), vb) {
-            (Some(toml::Value::Table(ta)), toml::Value::Table(tb)) => {
-                diff(&format!("{key}."), ta, tb, out)
-            }
-            (Some(va), vb) if va == vb => {}
-            (Some(va), vb) => out.push(format!("{key} {} → {}", short(va), short(vb))),
-            (None, vb) => out.push(format!("{key} → {}", short(vb))),
-        }
-    }
 }

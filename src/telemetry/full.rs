@@ -1,0 +1,161 @@
+//! What only level full draws: the cloth's surface and normals, each
+//! family's correction arrows, and (in the debugger) the values shown when
+//! a particle is hovered; and blanking them once a frame no longer draws
+//! them, since the viewer shows each entity's latest data.
+
+use glam::Vec3;
+use rerun::RecordingStreamResult;
+
+use super::{Telemetry, batch, color, paths};
+use crate::scene::Scene;
+use crate::solver::{Diagnostics, Family, PerFamily};
+
+/// What of level full's drawing the viewer still shows: it shows each
+/// entity's latest data, so whatever a frame no longer draws (a family
+/// whose arrows all fell under the threshold, or everything of level full
+/// after a switch to summary) is logged once as empty, and not again.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Drawn {
+    /// The mesh's vertices and the normals.
+    surface: bool,
+    /// The per-particle hover values.
+    particle_values: bool,
+    /// Per family, its δx and δθ arrows.
+    arrows: PerFamily<[bool; 2]>,
+}
+
+impl Telemetry {
+    /// Draws the surface, the normals (arrows of `2 · radius`), the
+    /// corrections and, if asked for, the hover values.
+    pub(super) fn log_full(&mut self, scene: &Scene, radius: f32) -> RecordingStreamResult<()> {
+        let solver = scene.solver();
+        let x = &solver.state().position;
+        let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
+        self.rec
+            .log(paths::MESH, &batch::mesh_update(x, &normals))?;
+        self.rec.log(
+            paths::NORMALS,
+            &batch::arrows(x, &normals, 2.0 * radius, |_| true)
+                .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
+        )?;
+        self.drawn.surface = true;
+        if let Some(d) = solver.diagnostics() {
+            self.log_corrections(x, d)?;
+        }
+        if self.particle_values {
+            self.log_particle_values(scene)?;
+        }
+        Ok(())
+    }
+
+    /// Per-particle values beside the points, so hovering a particle in the
+    /// viewer shows them: strain, each family's violation, and the length
+    /// of each family's δx (m) and δθ (rad) in the last adjust (δθ only for
+    /// the families that turn elements). Single precision, as the solver
+    /// computes them.
+    fn log_particle_values(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
+        let solver = scene.solver();
+        let mut values = rerun::AnyValues::default()
+            .with_component_from_data("strain", f32s(solver.particle_strain()));
+        for f in Family::ALL {
+            values = values.with_component_from_data(
+                particle_component("violation", f),
+                f32s(solver.particle_violation(f)),
+            );
+        }
+        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
+            let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
+            for f in Family::ALL {
+                let fd = d.family(f);
+                values =
+                    values.with_component_from_data(particle_component("dx", f), lengths(&fd.dx));
+                if f.turns() {
+                    values = values.with_component_from_data(
+                        particle_component("dtheta", f),
+                        lengths(&fd.dtheta),
+                    );
+                }
+            }
+        }
+        self.drawn.particle_values = true;
+        self.rec.log(paths::PARTICLES, &values)
+    }
+
+    /// Each family's δx and δθ arrows of at least the threshold's length,
+    /// none for a family switched off. A family with none to draw logs
+    /// nothing, unless it drew some at the last frame: then its empty
+    /// batch clears them.
+    fn log_corrections(&mut self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
+        let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
+        for f in Family::ALL {
+            let fd = d.family(f);
+            let shown = self.settings.corrections[f];
+            for (k, (kind, vectors)) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)]
+                .into_iter()
+                .enumerate()
+            {
+                let arrows = batch::arrows(x, vectors, scale, |v| {
+                    shown && {
+                        let len = v.length();
+                        len >= threshold && len > 0.0
+                    }
+                });
+                let any = arrows.vectors.as_ref().is_some_and(|v| !v.array.is_empty());
+                if any || self.drawn.arrows[f][k] {
+                    self.rec.log(
+                        paths::correction(f, kind),
+                        &arrows.with_colors([color::family(f)]),
+                    )?;
+                }
+                self.drawn.arrows[f][k] = any;
+            }
+        }
+        Ok(())
+    }
+
+    /// Logs as empty what level full drew at the last frame and this frame
+    /// does not: the mesh's vertices, the normals, the correction arrows
+    /// and the hover values (the mesh's triangles stay: they are static).
+    pub(super) fn blank_full(&mut self) -> RecordingStreamResult<()> {
+        let rec = &self.rec;
+        let drawn = std::mem::take(&mut self.drawn);
+        if drawn.surface {
+            rec.log(paths::MESH, &batch::mesh_update(&[], &[]))?;
+            rec.log(paths::NORMALS, &batch::arrows(&[], &[], 1.0, |_| true))?;
+        }
+        for (f, kinds) in drawn.arrows.iter() {
+            for (kind, _) in ["dx", "dtheta"].into_iter().zip(kinds).filter(|(_, d)| **d) {
+                rec.log(
+                    paths::correction(f, kind),
+                    &batch::arrows(&[], &[], 1.0, |_| true),
+                )?;
+            }
+        }
+        if drawn.particle_values {
+            let none = || f32s(Vec::new());
+            let mut values = rerun::AnyValues::default().with_component_from_data("strain", none());
+            for f in Family::ALL {
+                values = values
+                    .with_component_from_data(particle_component("violation", f), none())
+                    .with_component_from_data(particle_component("dx", f), none());
+                if f.turns() {
+                    values =
+                        values.with_component_from_data(particle_component("dtheta", f), none());
+                }
+            }
+            rec.log(paths::PARTICLES, &values)?;
+        }
+        Ok(())
+    }
+}
+
+/// A batch of single-precision values, one per particle.
+fn f32s(values: Vec<f32>) -> rerun::external::arrow::array::ArrayRef {
+    std::sync::Arc::new(rerun::external::arrow::array::Float32Array::from(values))
+}
+
+/// A per-family component on the particles entity: `violation_stretch`,
+/// `dx_curvature`, …
+fn particle_component(kind: &str, f: Family) -> rerun::ComponentIdentifier {
+    rerun::ComponentIdentifier::try_new(format!("{kind}_{}", f.name())).expect("not empty")
+}
