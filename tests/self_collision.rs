@@ -286,6 +286,16 @@ fn contacts_push_the_layers_apart_monotonically() {
     assert_eq!(s.self_crossings(), 0);
 }
 
+/// The folded sheet with its layers inside the thickness, self-collision
+/// at `weight` and every other family at its default.
+fn folded_inside(weight: f32) -> Solver {
+    let params = Params {
+        weights: Weights::default().with(Family::SelfCollision, weight),
+        ..Params::default()
+    };
+    folded(0.004, params)
+}
+
 /// Per particle, the self family's violation is what the figures report,
 /// particle by particle: its largest value is the family's measured max
 /// while the family is on, and, like the figures, it is 0 while the family
@@ -293,11 +303,7 @@ fn contacts_push_the_layers_apart_monotonically() {
 #[test]
 fn per_particle_self_violation_agrees_with_the_figures() {
     for weight in [0.0, 1.0] {
-        let params = Params {
-            weights: Weights::default().with(Family::SelfCollision, weight),
-            ..Params::default()
-        };
-        let s = folded(0.004, params);
+        let s = folded_inside(weight);
         let each = s.particle_violation(Family::SelfCollision);
         let largest = each.iter().copied().fold(0.0f32, f32::max);
         let figures = s.measured_violations()[Family::SelfCollision];
@@ -316,11 +322,7 @@ fn per_particle_self_violation_agrees_with_the_figures() {
 #[test]
 fn one_particle_s_readout_matches_the_whole_cloth_s() {
     for weight in [0.0, 1.0] {
-        let params = Params {
-            weights: Weights::default().with(Family::SelfCollision, weight),
-            ..Params::default()
-        };
-        let mut s = folded(0.004, params);
+        let mut s = folded_inside(weight);
         // Move and tilt every element a little, each its own way, so that
         // every family is violated somewhere (the layers stay inside the
         // thickness).

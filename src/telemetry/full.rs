@@ -55,28 +55,14 @@ impl Telemetry {
     /// computes them.
     fn log_particle_values(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
         let solver = scene.solver();
-        let mut values = rerun::AnyValues::default()
-            .with_component_from_data("strain", f32s(solver.particle_strain()));
-        for f in Family::ALL {
-            values = values.with_component_from_data(
-                particle_component("violation", f),
-                f32s(solver.particle_violation(f)),
-            );
-        }
-        if let Some(d) = solver.diagnostics().filter(|d| d.corrections) {
-            let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
-            for f in Family::ALL {
-                let fd = d.family(f);
-                values =
-                    values.with_component_from_data(particle_component("dx", f), lengths(&fd.dx));
-                if f.turns() {
-                    values = values.with_component_from_data(
-                        particle_component("dtheta", f),
-                        lengths(&fd.dtheta),
-                    );
-                }
-            }
-        }
+        let corrections = solver.diagnostics().filter(|d| d.corrections);
+        let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
+        let values = hover_values(|value| match value {
+            Hover::Strain => Some(f32s(solver.particle_strain())),
+            Hover::Violation(f) => Some(f32s(solver.particle_violation(f))),
+            Hover::Dx(f) => corrections.map(|d| lengths(&d.family(f).dx)),
+            Hover::Dtheta(f) => corrections.map(|d| lengths(&d.family(f).dtheta)),
+        });
         self.drawn.particle_values = true;
         self.rec.log(paths::PARTICLES, &values)
     }
@@ -119,43 +105,57 @@ impl Telemetry {
     pub(super) fn blank_full(&mut self) -> RecordingStreamResult<()> {
         let rec = &self.rec;
         let drawn = std::mem::take(&mut self.drawn);
+        let no_arrows = || batch::arrows(&[], &[], 1.0, |_| true);
         if drawn.surface {
             rec.log(paths::MESH, &batch::mesh_update(&[], &[]))?;
-            rec.log(paths::NORMALS, &batch::arrows(&[], &[], 1.0, |_| true))?;
+            rec.log(paths::NORMALS, &no_arrows())?;
         }
         for (f, kinds) in drawn.arrows.iter() {
             for (kind, _) in ["dx", "dtheta"].into_iter().zip(kinds).filter(|(_, d)| **d) {
-                rec.log(
-                    paths::correction(f, kind),
-                    &batch::arrows(&[], &[], 1.0, |_| true),
-                )?;
+                rec.log(paths::correction(f, kind), &no_arrows())?;
             }
         }
         if drawn.particle_values {
-            let none = || f32s(Vec::new());
-            let mut values = rerun::AnyValues::default().with_component_from_data("strain", none());
-            for f in Family::ALL {
-                values = values
-                    .with_component_from_data(particle_component("violation", f), none())
-                    .with_component_from_data(particle_component("dx", f), none());
-                if f.turns() {
-                    values =
-                        values.with_component_from_data(particle_component("dtheta", f), none());
-                }
-            }
-            rec.log(paths::PARTICLES, &values)?;
+            rec.log(paths::PARTICLES, &hover_values(|_| Some(f32s(Vec::new()))))?;
         }
         Ok(())
     }
 }
 
+/// One of the values shown for a hovered particle.
+#[derive(Clone, Copy)]
+enum Hover {
+    Strain,
+    Violation(Family),
+    Dx(Family),
+    Dtheta(Family),
+}
+
+/// The hover values, each as `value` gives it (left out where it gives
+/// none): `strain`, then per family `violation_{family}`, `dx_{family}` and,
+/// for the families that turn elements, `dtheta_{family}`.
+fn hover_values(
+    mut value: impl FnMut(Hover) -> Option<rerun::external::arrow::array::ArrayRef>,
+) -> rerun::AnyValues {
+    let mut parts = vec![(Hover::Strain, "strain".to_string())];
+    for f in Family::ALL {
+        parts.push((Hover::Violation(f), format!("violation_{}", f.name())));
+        parts.push((Hover::Dx(f), format!("dx_{}", f.name())));
+        if f.turns() {
+            parts.push((Hover::Dtheta(f), format!("dtheta_{}", f.name())));
+        }
+    }
+    let mut values = rerun::AnyValues::default();
+    for (part, name) in parts {
+        if let Some(array) = value(part) {
+            let name = rerun::ComponentIdentifier::try_new(name).expect("not empty");
+            values = values.with_component_from_data(name, array);
+        }
+    }
+    values
+}
+
 /// A batch of single-precision values, one per particle.
 fn f32s(values: Vec<f32>) -> rerun::external::arrow::array::ArrayRef {
     std::sync::Arc::new(rerun::external::arrow::array::Float32Array::from(values))
-}
-
-/// A per-family component on the particles entity: `violation_stretch`,
-/// `dx_curvature`, …
-fn particle_component(kind: &str, f: Family) -> rerun::ComponentIdentifier {
-    rerun::ComponentIdentifier::try_new(format!("{kind}_{}", f.name())).expect("not empty")
 }
