@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use weft::record::{Figures, Run};
-use weft::scene::preset::Level;
+use weft::scene::preset::{Level, TelemetrySettings};
 use weft::scene::{Override, Scene, load, shipped};
 use weft::solver::Family;
 use weft::telemetry::{Telemetry, paths, read};
@@ -238,9 +238,9 @@ fn level_off_logs_no_frames_and_log_every_thins_them() {
 fn what_a_frame_no_longer_draws_is_blanked_once() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("switch.rrd");
-    let set_level = |run: &mut Run, level: Level| {
+    let set = |run: &mut Run, change: &dyn Fn(&mut TelemetrySettings)| {
         let mut t = *run.telemetry.settings();
-        t.level = level;
+        change(&mut t);
         run.telemetry.set_settings(t);
     };
     record_to(
@@ -249,8 +249,8 @@ fn what_a_frame_no_longer_draws_is_blanked_once() {
         &["telemetry.level=\"full\""],
         10,
         |run| match run.scene.frame() + 1 {
-            6 => set_level(run, Level::Summary),
-            9 => set_level(run, Level::Full),
+            6 => set(run, &|t| t.level = Level::Summary),
+            9 => set(run, &|t| t.level = Level::Full),
             _ => {}
         },
     );
@@ -287,9 +287,7 @@ fn what_a_frame_no_longer_draws_is_blanked_once() {
         6,
         |run| {
             if run.scene.frame() + 1 == 4 {
-                let mut t = *run.telemetry.settings();
-                t.corrections[Family::Stretch] = false;
-                run.telemetry.set_settings(t);
+                set(run, &|t| t.corrections[Family::Stretch] = false);
             }
         },
     );
