@@ -2,8 +2,9 @@
 //! can fail. A flag on a pole hangs; a Cusick drape test spans real fabrics
 //! by the bending weight; the same cloth drapes the same whatever the
 //! iterations, substeps and resolution; the frame of reference does not
-//! matter; the oriented families do work; colliders keep particles out and
-//! friction follows Coulomb's law.
+//! matter; the oriented families do work; a sheet that settles keeps its
+//! normals on the surface; colliders keep particles out and friction
+//! follows Coulomb's law.
 //!
 //! The figures these tests print (`cargo test --test cloth -- --nocapture`)
 //! are the tables in `docs/method.md`.
@@ -297,6 +298,28 @@ fn the_oriented_families_change_the_drape() {
         (on - off).abs() >= 0.03,
         "planarity and normality should change the drape: on {on}, off {off}"
     );
+}
+
+/// A sheet that settles slowly keeps every element facing the way the
+/// surface does, and close to it: planarity holds the normals while the
+/// cloth moves slowly. (The flags, which move fast, do not: see the known
+/// limit in `docs/method.md`, section 7.)
+#[test]
+fn a_settling_sheet_keeps_its_normals_on_the_surface() {
+    let loaded = weft::scene::load::load("hanging_sheet", &[]).expect("shipped preset");
+    let mut scene = weft::scene::Scene::new(&loaded.preset).unwrap();
+    let (mut worst_flipped, mut worst_offset) = (0.0f32, 0.0f32);
+    for _ in 0..scene.frames_in(loaded.preset.duration) {
+        scene.step().unwrap();
+        let o = scene.solver().orientation();
+        worst_flipped = worst_flipped.max(o.flipped);
+        worst_offset = worst_offset.max(o.offset_rms);
+    }
+    println!(
+        "hanging sheet: at worst {worst_flipped} turned over, {worst_offset:.4} rad RMS off the surface"
+    );
+    assert_eq!(worst_flipped, 0.0);
+    assert!(worst_offset < 0.05, "{worst_offset}");
 }
 
 /// With no air, a flag carried at constant velocity hangs exactly as on a

@@ -146,6 +146,7 @@ fn two_runs_differing_in_tuning_are_compared_key_by_key_and_frame_by_frame() {
         for path in [
             format!("metrics/strain/{run}"),
             format!("metrics/energy/{run}"),
+            format!("metrics/flipped/{run}"),
             format!("metrics/violation/stretch/{run}"),
             format!("world/{run}/particles"),
             format!("world/{run}/mesh"),

@@ -46,6 +46,20 @@ fn record_to(
     run.finish().unwrap()
 }
 
+/// `frames` frames of `name` recorded at level summary, read back.
+fn summary_of(name: &str, frames: u64) -> read::Recording {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(format!("{name}.rrd"));
+    record_to(
+        &path,
+        name,
+        &["telemetry.level=\"summary\""],
+        frames,
+        |_| {},
+    );
+    read::read(&path).unwrap()
+}
+
 #[test]
 fn every_preset_records_and_reads_back() {
     let dir = tempfile::tempdir().unwrap();
@@ -119,6 +133,8 @@ fn every_preset_records_and_reads_back() {
         }
         for path in [
             paths::STRAIN,
+            paths::NORMALS_FLIPPED,
+            paths::NORMALS_OFFSET,
             paths::ENERGY,
             paths::TIME_TOTAL,
             paths::TIME_UPDATE,
@@ -186,6 +202,47 @@ fn figures_do_not_depend_on_the_telemetry_level() {
             _ => assert!(self_collision > 0.0, "the fold presses the layers"),
         }
     }
+}
+
+/// The plot of the normals against the surface carries, at every frame,
+/// what the solver measures; colouring by the offset shows a flipped
+/// element at the top of the ramp and the rest at its bottom.
+#[test]
+fn normals_against_the_surface_are_plotted_and_coloured() {
+    use weft::scene::preset::ColorBy;
+    let frames = 6;
+    let rec = summary_of("windy_flag", frames);
+    let loaded = load::load("windy_flag", &[]).unwrap();
+    let mut scene = Scene::new(&loaded.preset).unwrap();
+    let (mut flipped, mut offset) = (Vec::new(), Vec::new());
+    for frame in 1..=frames as i64 {
+        scene.step().unwrap();
+        let o = scene.solver().orientation();
+        flipped.push((frame, o.flipped as f64));
+        offset.push((frame, o.offset_rms as f64));
+    }
+    let plotted = |path: &str| -> Vec<(i64, f64)> {
+        rec.scalars[path]
+            .iter()
+            .map(|s| (s.frame, s.value))
+            .collect()
+    };
+    assert_eq!(plotted(paths::NORMALS_FLIPPED), flipped);
+    assert_eq!(plotted(paths::NORMALS_OFFSET), offset);
+    assert!(offset.iter().all(|&(_, v)| v > 0.0), "{offset:?}");
+
+    let flip = 7;
+    let st = scene.solver_mut().state_mut();
+    st.orientation[flip] = glam::Quat::from_rotation_x(std::f32::consts::PI) * st.orientation[flip];
+    let offsets = scene.solver().normal_offsets();
+    let colours = weft::telemetry::color::particles(ColorBy::NormalOffset, &scene);
+    for (i, (c, a)) in colours.iter().zip(&offsets).enumerate() {
+        assert_eq!(*c, weft::telemetry::color::ramp(a / std::f32::consts::PI));
+        if i != flip {
+            assert!(*a < 0.5, "{i}: {a}");
+        }
+    }
+    assert!(offsets[flip] > 2.6, "{}", offsets[flip]);
 }
 
 #[test]
@@ -302,17 +359,8 @@ fn what_a_frame_no_longer_draws_is_blanked_once() {
 /// (four corners, its triangles static) are logged at every frame.
 #[test]
 fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("car.rrd");
     let frames = 8;
-    record_to(
-        &path,
-        "flag_on_car",
-        &["telemetry.level=\"summary\""],
-        frames,
-        |_| {},
-    );
-    let rec = read::read(&path).unwrap();
+    let rec = summary_of("flag_on_car", frames);
     let every: Vec<i64> = (0..=frames as i64).collect();
     assert_eq!(rec.frames(&paths::body("car")), every);
     // flag_on_car's colliders: the car's box (0), then the road (1).
@@ -324,15 +372,7 @@ fn summary_frames_carry_the_bodies_and_the_ground_under_the_cloth() {
     assert!(rec.entities[&paths::body_collider("car", 0)].is_static);
 
     // A body that does not move has its pose logged once.
-    let path = dir.path().join("sheet.rrd");
-    record_to(
-        &path,
-        "hanging_sheet",
-        &["telemetry.level=\"summary\""],
-        frames,
-        |_| {},
-    );
-    let rec = read::read(&path).unwrap();
+    let rec = summary_of("hanging_sheet", frames);
     assert_eq!(rec.frames(&paths::body("rail")), vec![0]);
 }
 

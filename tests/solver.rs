@@ -628,6 +628,59 @@ fn an_exactly_flipped_normal_turns_back() {
     );
 }
 
+#[test]
+fn normal_offsets_measure_each_element_against_the_surface() {
+    // A tilted cloth at rest: every element faces the way its surface does,
+    // borders included.
+    let tilted = ClothSpec {
+        rotation: Quat::from_euler(glam::EulerRot::XYZ, 1.2, -0.4, 2.0),
+        ..spec(5)
+    };
+    let mut s = Solver::new(tilted, Params::default(), &[]).unwrap();
+    let at_rest = s.normal_offsets();
+    assert!(at_rest.iter().all(|&a| a < 1e-3), "{at_rest:?}");
+    assert_eq!(s.orientation().flipped, 0.0);
+
+    // Turn one element about a tangent axis by 0.3 rad and flip another.
+    let (tilted_one, flipped_one) = (6, 18);
+    let st = s.state_mut();
+    let tangent = st.orientation[0] * Vec3::X;
+    st.orientation[tilted_one] = Quat::from_axis_angle(tangent, 0.3) * st.orientation[tilted_one];
+    st.orientation[flipped_one] =
+        Quat::from_axis_angle(tangent, std::f32::consts::PI) * st.orientation[flipped_one];
+    let offsets = s.normal_offsets();
+    assert!(
+        (offsets[tilted_one] - 0.3).abs() < 1e-3,
+        "{}",
+        offsets[tilted_one]
+    );
+    let pi = std::f32::consts::PI;
+    assert!(offsets[flipped_one] > pi - 1e-3, "{}", offsets[flipped_one]);
+    let others = (0..offsets.len()).filter(|&i| i != tilted_one && i != flipped_one);
+    assert!(others.map(|i| offsets[i]).all(|a| a < 1e-3));
+    let o = s.orientation();
+    assert_eq!(o.flipped, 1.0 / 25.0);
+    // The flipped one lies on the surface's normal line: it adds nothing.
+    let off_line = std::f32::consts::PI - offsets[flipped_one];
+    let rms = ((0.3f32.powi(2) + off_line.powi(2)) / 25.0).sqrt();
+    assert!(
+        (o.offset_rms - rms).abs() < 1e-3,
+        "{} against {rms}",
+        o.offset_rms
+    );
+
+    // A rigid motion of the whole cloth changes none of it.
+    let r = Quat::from_rotation_y(0.7);
+    let st = s.state_mut();
+    for i in 0..st.len() {
+        st.position[i] = r * st.position[i] + Vec3::new(3.0, -1.0, 2.0);
+        st.orientation[i] = r * st.orientation[i];
+    }
+    for (a, b) in s.normal_offsets().iter().zip(&offsets) {
+        assert!((a - b).abs() < 1e-3, "{a} against {b}");
+    }
+}
+
 /// The wind's acceleration as first written: each part's length taken from
 /// the acceleration vector itself.
 fn wind_by_vector_lengths(env: &Environment, density: f32, n: Vec3, v: Vec3, dt: f32) -> Vec3 {

@@ -8,6 +8,7 @@
 //! | `world/{run}/particles`, `world/{run}/mesh` | each run's cloth, the `k`-th offset by `k · spacing` along the axis (0 with `--overlay`) |
 //! | `metrics/strain/{run}` | largest edge strain |
 //! | `metrics/energy/{run}` | kinetic energy |
+//! | `metrics/flipped/{run}` | the share of elements facing against the surface |
 //! | `metrics/violation/{family}/{run}` | largest violation per family |
 //! | `metrics/difference/{run}` | largest particle distance to the first run (m) |
 //! | `events/{run}` | each run's events: tuning changes, failures |
@@ -112,6 +113,9 @@ pub fn blueprint(runs: &[RunData]) -> Blueprint {
         TimeSeriesView::new("Kinetic energy (J)")
             .with_origin("metrics/energy")
             .into(),
+        TimeSeriesView::new("Elements facing against the surface (share)")
+            .with_origin("metrics/flipped")
+            .into(),
     ];
     for f in Family::ALL {
         plots.push(
@@ -213,12 +217,17 @@ pub fn write(
         };
         style(format!("metrics/strain/{name}"))?;
         style(format!("metrics/energy/{name}"))?;
+        style(format!("metrics/flipped/{name}"))?;
         for f in Family::ALL {
             style(format!("metrics/violation/{}/{name}", f.name()))?;
         }
         let series = [
             (paths::STRAIN.to_string(), format!("metrics/strain/{name}")),
             (paths::ENERGY.to_string(), format!("metrics/energy/{name}")),
+            (
+                paths::NORMALS_FLIPPED.to_string(),
+                format!("metrics/flipped/{name}"),
+            ),
         ]
         .into_iter()
         .chain(Family::ALL.iter().map(|f| {

@@ -12,8 +12,8 @@
 //! blocks whose `Tally`s merge in a fixed order.
 //!
 //! The measurement functions here ([`max_strain`], [`kinetic_energy`],
-//! [`particle_strain`]) are plain functions of a state, used by diagnostics
-//! and by tests alike.
+//! [`particle_strain`], [`normal_offsets`]) are plain functions of a state,
+//! used by diagnostics, telemetry and tests alike.
 
 use std::time::Duration;
 
@@ -22,7 +22,7 @@ use glam::Vec3;
 use glam::Quat;
 
 use super::{
-    cloth::ClothState,
+    cloth::{ClothSpec, ClothState},
     constraints::lanes::{Lane, V3, WIDE_LANES},
     constraints::{Particles, Recorder, Shared, atan2},
     family::{Family, PerFamily},
@@ -399,6 +399,69 @@ fn edge_strains<'a>(
             let len = x[p.b as usize].distance(x[p.a as usize]);
             (p, ((len - p.rest) / p.rest).max(0.0))
         })
+}
+
+/// Per element, the angle in `[0, π]` between its normal `n` and the normal
+/// of the surface its neighbours make,
+///
+/// ```text
+/// g = (x(i+1, j) − x(i−1, j)) × (x(i, j+1) − x(i, j−1))
+/// ```
+///
+/// (one-sided at the border), which faces the way every element faced at
+/// rest. Planarity cannot tell `n` from `−n`, so an angle above 90° is an
+/// element facing the other way. 0 where `g` vanishes (a particle whose
+/// neighbours coincide).
+pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
+    let x = &state.position;
+    let at = |i: u32, j: u32| x[spec.index(i, j)];
+    let mut out = Vec::with_capacity(x.len());
+    for j in 0..spec.warp {
+        let (down, up) = (j.saturating_sub(1), (j + 1).min(spec.warp - 1));
+        for i in 0..spec.weft {
+            let (left, right) = (i.saturating_sub(1), (i + 1).min(spec.weft - 1));
+            let g = (at(right, j) - at(left, j)).cross(at(i, up) - at(i, down));
+            let n = state.normal(spec.index(i, j));
+            out.push(if g == Vec3::ZERO {
+                0.0
+            } else {
+                atan2(n.cross(g).length(), n.dot(g))
+            });
+        }
+    }
+    out
+}
+
+/// How well the elements' normals follow the surface: see [`orientation`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Orientation {
+    /// The share of elements facing against the surface (offset above 90°),
+    /// in `[0, 1]`.
+    pub flipped: f32,
+    /// The root mean square of each normal's angle to the surface's normal
+    /// line, whichever way it faces (`min(a, π − a)` of an offset `a`), in
+    /// radians: how far the normals stray, apart from turning over.
+    pub offset_rms: f32,
+}
+
+/// Sums up [`normal_offsets`].
+pub fn orientation(offsets: &[f32]) -> Orientation {
+    if offsets.is_empty() {
+        return Orientation::default();
+    }
+    let flipped = offsets
+        .iter()
+        .filter(|&&a| a > std::f32::consts::FRAC_PI_2)
+        .count();
+    let squares: f64 = offsets
+        .iter()
+        .map(|&a| a.min(std::f32::consts::PI - a) as f64)
+        .map(|a| a * a)
+        .sum();
+    Orientation {
+        flipped: flipped as f32 / offsets.len() as f32,
+        offset_rms: (squares / offsets.len() as f64).sqrt() as f32,
+    }
 }
 
 #[cfg(test)]

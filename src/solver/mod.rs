@@ -56,7 +56,7 @@ use std::time::Instant;
 
 pub use cloth::{ClothSpec, ClothState};
 pub use collision::{Collider, Pose, Shape};
-pub use diagnostics::{Diagnostics, Violation};
+pub use diagnostics::{Diagnostics, Orientation, Violation};
 pub use family::{Family, PerFamily, STRETCH_PASSES};
 pub use forced_rotation::ForcedRotation;
 pub use params::{
@@ -465,6 +465,19 @@ impl Solver {
     /// edges alone.
     pub fn particle_strain_at(&self, i: usize) -> f32 {
         diagnostics::particle_strain_at(&self.state, &self.topology, i)
+    }
+
+    /// Per element, the angle between its normal and the surface's
+    /// ([`diagnostics::normal_offsets`]; above 90°: facing the other way).
+    pub fn normal_offsets(&self) -> Vec<f32> {
+        diagnostics::normal_offsets(&self.state, &self.spec)
+    }
+
+    /// How well the elements' normals follow the surface: the share facing
+    /// the other way, and the RMS angle off the surface's normal line
+    /// ([`diagnostics::orientation`]).
+    pub fn orientation(&self) -> Orientation {
+        diagnostics::orientation(&self.normal_offsets())
     }
 
     /// How many edges of the cloth's mesh cross a triangle they share no

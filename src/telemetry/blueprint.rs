@@ -1,5 +1,6 @@
 //! The default layout: the 3D view with the cloth and its corrections beside
-//! plots of violations, strain and energy, and timings.
+//! plots of violations, strain, the normals against the surface, energy and
+//! timings.
 
 use rerun::blueprint::{
     Blueprint, Horizontal, SelectionPanel, Spatial3DView, TextLogView, TimePanel, TimeSeriesView,
@@ -31,6 +32,9 @@ pub fn default() -> Blueprint {
                     .into(),
                 TimeSeriesView::new("Strain")
                     .with_origin("metrics/strain")
+                    .into(),
+                TimeSeriesView::new("Normals against the surface")
+                    .with_origin("metrics/normals")
                     .into(),
                 TimeSeriesView::new("Kinetic energy")
                     .with_origin("metrics/energy")

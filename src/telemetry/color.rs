@@ -39,7 +39,8 @@ pub fn ramp(t: f32) -> Color {
 
 /// Per-particle colours for `by`, each scaled to a fixed, documented range
 /// so colours mean the same from frame to frame: strain 0 → 10 %, speed
-/// 0 → 10 m/s, correction (all families, or one) 0 → 1 mm.
+/// 0 → 10 m/s, correction (all families, or one) 0 → 1 mm, the normal's
+/// offset from the surface's 0 → 180°.
 pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
     let solver = scene.solver();
     let state = solver.state();
@@ -56,6 +57,11 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
             }
             strain.iter().map(|s| ramp(s / 0.1)).collect()
         }
+        ColorBy::NormalOffset => solver
+            .normal_offsets()
+            .iter()
+            .map(|a| ramp(a / std::f32::consts::PI))
+            .collect(),
         ColorBy::Speed => {
             let dt = solver.params().substep_dt();
             (0..n)

@@ -19,6 +19,7 @@
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
 //! | `metrics/violation/self/crossings` | mesh edges through a triangle (0 when the cloth does not pass through itself), while self-collision is on | summary |
 //! | `metrics/strain/max`, `metrics/energy/kinetic` | strain, energy | summary |
+//! | `metrics/normals/{flipped,offset_rms}` | the normals against the surface | summary |
 //! | `metrics/time/…` | update, adjust per family, collisions, telemetry, total (ms) | summary |
 //! | `params` | solver parameters (TOML), at every change | always |
 //! | `events` | parameter changes, solver failures | always |
@@ -379,6 +380,15 @@ impl Telemetry {
                 rec.log(paths::SELF_CROSSINGS, &rerun::Scalars::single(n as f64))?;
             }
             rec.log(paths::STRAIN, &rerun::Scalars::single(d.max_strain as f64))?;
+            let o = solver.orientation();
+            rec.log(
+                paths::NORMALS_FLIPPED,
+                &rerun::Scalars::single(o.flipped as f64),
+            )?;
+            rec.log(
+                paths::NORMALS_OFFSET,
+                &rerun::Scalars::single(o.offset_rms as f64),
+            )?;
             rec.log(
                 paths::ENERGY,
                 &rerun::Scalars::single(d.kinetic_energy as f64),

@@ -31,6 +31,11 @@ pub const SUMMARY: &str = "summary";
 pub const STRAIN: &str = "metrics/strain/max";
 /// How many edges of the mesh cross a triangle (self-collision's second measure).
 pub const SELF_CROSSINGS: &str = "metrics/violation/self/crossings";
+/// The share of elements whose normal faces against the surface.
+pub const NORMALS_FLIPPED: &str = "metrics/normals/flipped";
+/// The RMS angle between the elements' normals and the surface's normal
+/// line (either way), radians.
+pub const NORMALS_OFFSET: &str = "metrics/normals/offset_rms";
 /// Kinetic energy.
 pub const ENERGY: &str = "metrics/energy/kinetic";
 /// Update phase wall time.

@@ -42,13 +42,16 @@ pub enum ColorBy {
     /// Size of the self-collision family's correction alone.
     #[serde(rename = "correction.self")]
     CorrectionSelf,
+    /// The angle between the element's normal and the surface's (above
+    /// 90°: the element faces the other way).
+    NormalOffset,
     /// One colour.
     None,
 }
 
 impl ColorBy {
     /// Every choice, in menu order.
-    pub const ALL: [ColorBy; 9] = [
+    pub const ALL: [ColorBy; 10] = [
         ColorBy::Strain,
         ColorBy::Speed,
         ColorBy::Correction,
@@ -57,6 +60,7 @@ impl ColorBy {
         ColorBy::CorrectionNormality,
         ColorBy::CorrectionCurvature,
         ColorBy::CorrectionSelf,
+        ColorBy::NormalOffset,
         ColorBy::None,
     ];
 
@@ -71,6 +75,7 @@ impl ColorBy {
             ColorBy::CorrectionNormality => "correction.normality",
             ColorBy::CorrectionCurvature => "correction.curvature",
             ColorBy::CorrectionSelf => "correction.self",
+            ColorBy::NormalOffset => "normal_offset",
             ColorBy::None => "none",
         }
     }
