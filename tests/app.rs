@@ -597,6 +597,7 @@ fn the_inspector_shows_the_selected_particle() {
     assert!(p.dx.iter().any(|(_, d)| d.length() > 0.0), "{p:?}");
     h.get_by_label_contains(&format!("(i, j) = ({tip}, 0)"));
     h.get_by_label("|δx| (mm)");
+    h.get_by_label_contains("° off the surface's");
     h.state().session.send(Command::StopRecording);
     assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_none()));
 
@@ -606,6 +607,7 @@ fn the_inspector_shows_the_selected_particle() {
         "i",
         "j",
         "strain",
+        "normal_offset",
         "violation_planarity",
         "dx_curvature",
         "dtheta_normality",

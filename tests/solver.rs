@@ -656,6 +656,10 @@ fn normal_offsets_measure_each_element_against_the_surface() {
     );
     let pi = std::f32::consts::PI;
     assert!(offsets[flipped_one] > pi - 1e-3, "{}", offsets[flipped_one]);
+    // Inspecting one particle measures it alike, bit for bit.
+    for (i, a) in offsets.iter().enumerate() {
+        assert_eq!(s.normal_offset_at(i).to_bits(), a.to_bits(), "{i}");
+    }
     let others = (0..offsets.len()).filter(|&i| i != tilted_one && i != flipped_one);
     assert!(others.map(|i| offsets[i]).all(|a| a < 1e-3));
     let o = s.orientation();

@@ -437,6 +437,12 @@ impl Panel {
             "#{}  (i, j) = ({}, {})   strain {:.4}",
             p.index, p.cell.0, p.cell.1, p.strain
         ));
+        let offset = p.normal_offset.to_degrees();
+        let turned = if offset > 90.0 { ", turned over" } else { "" };
+        ui.monospace(format!("normal {offset:.1}° off the surface's{turned}"))
+            .on_hover_text(
+                "the angle between the element's normal and the surface its neighbours make",
+            );
         egui::Grid::new("particle")
             .num_columns(4)
             .striped(true)

@@ -413,23 +413,23 @@ fn edge_strains<'a>(
 /// element facing the other way. 0 where `g` vanishes (a particle whose
 /// neighbours coincide).
 pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
-    let x = &state.position;
-    let at = |i: u32, j: u32| x[spec.index(i, j)];
-    let mut out = Vec::with_capacity(x.len());
-    for j in 0..spec.warp {
-        let (down, up) = (j.saturating_sub(1), (j + 1).min(spec.warp - 1));
-        for i in 0..spec.weft {
-            let (left, right) = (i.saturating_sub(1), (i + 1).min(spec.weft - 1));
-            let g = (at(right, j) - at(left, j)).cross(at(i, up) - at(i, down));
-            let n = state.normal(spec.index(i, j));
-            out.push(if g == Vec3::ZERO {
-                0.0
-            } else {
-                atan2(n.cross(g).length(), n.dot(g))
-            });
-        }
+    (0..spec.warp)
+        .flat_map(|j| (0..spec.weft).map(move |i| normal_offset(state, spec, i, j)))
+        .collect()
+}
+
+/// Particle `(i, j)`'s entry of [`normal_offsets`] (for inspecting one
+/// particle).
+pub fn normal_offset(state: &ClothState, spec: &ClothSpec, i: u32, j: u32) -> f32 {
+    let at = |i: u32, j: u32| state.position[spec.index(i, j)];
+    let (left, right) = (i.saturating_sub(1), (i + 1).min(spec.weft - 1));
+    let (down, up) = (j.saturating_sub(1), (j + 1).min(spec.warp - 1));
+    let g = (at(right, j) - at(left, j)).cross(at(i, up) - at(i, down));
+    if g == Vec3::ZERO {
+        return 0.0;
     }
-    out
+    let n = state.normal(spec.index(i, j));
+    atan2(n.cross(g).length(), n.dot(g))
 }
 
 /// How well the elements' normals follow the surface: see [`orientation`].

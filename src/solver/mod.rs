@@ -473,6 +473,17 @@ impl Solver {
         diagnostics::normal_offsets(&self.state, &self.spec)
     }
 
+    /// Particle `i`'s entry of [`Solver::normal_offsets`], on its own.
+    pub fn normal_offset_at(&self, i: usize) -> f32 {
+        let weft = self.spec.weft as usize;
+        diagnostics::normal_offset(
+            &self.state,
+            &self.spec,
+            (i % weft) as u32,
+            (i / weft) as u32,
+        )
+    }
+
     /// How well the elements' normals follow the surface: the share facing
     /// the other way, and the RMS angle off the surface's normal line
     /// ([`diagnostics::orientation`]).

@@ -49,7 +49,8 @@ impl Telemetry {
     }
 
     /// Per-particle values beside the points, so hovering a particle in the
-    /// viewer shows them: strain, each family's violation, and the length
+    /// viewer shows them: strain, the normal's angle off the surface's
+    /// (radians), each family's violation, and the length
     /// of each family's δx (m) and δθ (rad) in the last adjust (δθ only for
     /// the families that turn elements). Single precision, as the solver
     /// computes them.
@@ -59,6 +60,7 @@ impl Telemetry {
         let lengths = |v: &[Vec3]| f32s(v.iter().map(|v| v.length()).collect());
         let values = hover_values(|value| match value {
             Hover::Strain => Some(f32s(solver.particle_strain())),
+            Hover::NormalOffset => Some(f32s(solver.normal_offsets())),
             Hover::Violation(f) => Some(f32s(solver.particle_violation(f))),
             Hover::Dx(f) => corrections.map(|d| lengths(&d.family(f).dx)),
             Hover::Dtheta(f) => corrections.map(|d| lengths(&d.family(f).dtheta)),
@@ -126,18 +128,23 @@ impl Telemetry {
 #[derive(Clone, Copy)]
 enum Hover {
     Strain,
+    NormalOffset,
     Violation(Family),
     Dx(Family),
     Dtheta(Family),
 }
 
 /// The hover values, each as `value` gives it (left out where it gives
-/// none): `strain`, then per family `violation_{family}`, `dx_{family}` and,
-/// for the families that turn elements, `dtheta_{family}`.
+/// none): `strain`, `normal_offset`, then per family `violation_{family}`,
+/// `dx_{family}` and, for the families that turn elements,
+/// `dtheta_{family}`.
 fn hover_values(
     mut value: impl FnMut(Hover) -> Option<rerun::external::arrow::array::ArrayRef>,
 ) -> rerun::AnyValues {
-    let mut parts = vec![(Hover::Strain, "strain".to_string())];
+    let mut parts = vec![
+        (Hover::Strain, "strain".to_string()),
+        (Hover::NormalOffset, "normal_offset".to_string()),
+    ];
     for f in Family::ALL {
         parts.push((Hover::Violation(f), format!("violation_{}", f.name())));
         parts.push((Hover::Dx(f), format!("dx_{}", f.name())));

@@ -94,6 +94,9 @@ pub struct ParticleReadout {
     pub cell: (u32, u32),
     /// Largest strain of its weft and warp edges.
     pub strain: f32,
+    /// The angle between its normal and the surface's, radians (above
+    /// π/2: it faces the other way).
+    pub normal_offset: f32,
     /// Per family, the largest violation of the constraints that involve it.
     pub violation: PerFamily<f32>,
     /// Whether the last step recorded its corrections (`dx` and `dtheta`

@@ -463,6 +463,7 @@ fn readout(scene: &Scene, i: usize) -> ParticleReadout {
         index: i,
         cell: (i as u32 % weft, i as u32 / weft),
         strain: solver.particle_strain_at(i),
+        normal_offset: solver.normal_offset_at(i),
         ..ParticleReadout::default()
     };
     let corrections = solver.diagnostics().filter(|d| d.corrections);
