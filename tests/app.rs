@@ -751,6 +751,7 @@ fn a_branch_draws_its_parent_beside_it() {
     // The series style (static) and the parent's ten frames.
     assert_eq!(count("/metrics/strain/parent"), Some(11), "{rows:?}");
     assert_eq!(count("/metrics/violation/curvature/parent"), Some(11));
+    assert_eq!(count("/metrics/normals/parent"), Some(11));
 }
 
 /// A preset file as the base: named relative to the saved file when they

@@ -103,7 +103,11 @@ pub(super) enum Start {
 /// A run's plotted values per frame (from frame 1): simulated time, max
 /// strain, kinetic energy and each family's max violation (in
 /// [`Family::index`] order).
-pub type Series = Vec<(u64, f64, [f32; 2 + Family::COUNT])>;
+pub type Series = Vec<(u64, f64, [f32; SERIES_VALUES])>;
+
+/// What a [`Series`] keeps of each frame: max strain, kinetic energy, each
+/// family's max violation, and the share of elements turned over.
+pub const SERIES_VALUES: usize = 3 + Family::COUNT;
 
 /// A new run of `scene` (or `snapshot`) into a new recording.
 pub(super) struct Opened {
@@ -222,8 +226,9 @@ pub(super) fn open(
 
 /// Logs a parent run's plotted values into a branch's recording, beside the
 /// branch's own in the same plots: `metrics/strain/parent`,
-/// `metrics/energy/parent`, `metrics/violation/{family}/parent`, thin and
-/// grey, named after the parent run.
+/// `metrics/energy/parent`, `metrics/violation/{family}/parent`,
+/// `metrics/normals/parent` (the share turned over), thin and grey, named
+/// after the parent run.
 fn log_parent_series(
     rec: &rerun::RecordingStream,
     parent: u32,
@@ -251,6 +256,11 @@ fn log_parent_series(
             format!("{} max", f.name()),
         ));
     }
+    plots.push((
+        paths::NORMALS_FLIPPED.replace("/flipped", "/parent"),
+        2 + Family::COUNT,
+        "flipped".to_string(),
+    ));
     for (path, k, label) in plots {
         rec.log_static(
             path.as_str(),

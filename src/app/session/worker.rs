@@ -14,6 +14,7 @@ use crate::scene::{Loaded, Scene, load};
 use crate::solver::{Family, PerFamily};
 use crate::telemetry::Collect;
 
+use super::runs::SERIES_VALUES;
 use super::runs::{Forward, Start, Tee, open};
 use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
 
@@ -347,12 +348,13 @@ impl Worker {
                 self.history
                     .stepped(frame, run.scene.time(), || run.snapshot());
                 if let Some(d) = run.scene.solver().diagnostics() {
-                    let mut values = [0.0; 2 + Family::COUNT];
+                    let mut values = [0.0; SERIES_VALUES];
                     values[0] = d.max_strain;
                     values[1] = d.kinetic_energy;
                     for f in Family::ALL {
                         values[2 + f.index()] = d.family(f).violation.max;
                     }
+                    values[2 + Family::COUNT] = run.scene.solver().orientation().flipped;
                     self.series.push((frame, run.scene.time(), values));
                 }
             }
