@@ -101,8 +101,8 @@ pub(super) enum Start {
 }
 
 /// A run's plotted values per frame (from frame 1): simulated time, max
-/// strain, kinetic energy and each family's max violation (in
-/// [`Family::index`] order).
+/// strain, kinetic energy, each family's max violation (in
+/// [`Family::index`] order) and the share of elements turned over.
 pub type Series = Vec<(u64, f64, [f32; SERIES_VALUES])>;
 
 /// What a [`Series`] keeps of each frame: max strain, kinetic energy, each

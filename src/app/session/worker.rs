@@ -14,8 +14,7 @@ use crate::scene::{Loaded, Scene, load};
 use crate::solver::{Family, PerFamily};
 use crate::telemetry::Collect;
 
-use super::runs::SERIES_VALUES;
-use super::runs::{Forward, Start, Tee, open};
+use super::runs::{Forward, SERIES_VALUES, Start, Tee, open};
 use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
 
 /// What the simulation thread owns: the current run and its history, every
