@@ -120,6 +120,13 @@ impl ClothSpec {
         (j * self.weft + i) as usize
     }
 
+    /// The grid cell `(i, j)` of particle `index`: the inverse of
+    /// [`ClothSpec::index`].
+    pub fn cell(&self, index: usize) -> (u32, u32) {
+        let index = index as u32;
+        (index % self.weft, index / self.weft)
+    }
+
     /// Rest spacing along the weft and along the warp, in metres.
     pub fn spacing(&self) -> (f32, f32) {
         (

@@ -413,14 +413,14 @@ fn edge_strains<'a>(
 /// element facing the other way. 0 where `g` vanishes (a particle whose
 /// neighbours coincide).
 pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
-    (0..spec.warp)
-        .flat_map(|j| (0..spec.weft).map(move |i| normal_offset(state, spec, i, j)))
+    (0..state.len())
+        .map(|k| normal_offset(state, spec, k))
         .collect()
 }
 
-/// Particle `(i, j)`'s entry of [`normal_offsets`] (for inspecting one
-/// particle).
-pub fn normal_offset(state: &ClothState, spec: &ClothSpec, i: u32, j: u32) -> f32 {
+/// Particle `k`'s entry of [`normal_offsets`] (for inspecting one particle).
+pub fn normal_offset(state: &ClothState, spec: &ClothSpec, k: usize) -> f32 {
+    let (i, j) = spec.cell(k);
     let at = |i: u32, j: u32| state.position[spec.index(i, j)];
     let (left, right) = (i.saturating_sub(1), (i + 1).min(spec.weft - 1));
     let (down, up) = (j.saturating_sub(1), (j + 1).min(spec.warp - 1));
@@ -428,7 +428,7 @@ pub fn normal_offset(state: &ClothState, spec: &ClothSpec, i: u32, j: u32) -> f3
     if g == Vec3::ZERO {
         return 0.0;
     }
-    let n = state.normal(spec.index(i, j));
+    let n = state.normal(k);
     atan2(n.cross(g).length(), n.dot(g))
 }
 

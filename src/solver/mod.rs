@@ -475,13 +475,7 @@ impl Solver {
 
     /// Particle `i`'s entry of [`Solver::normal_offsets`], on its own.
     pub fn normal_offset_at(&self, i: usize) -> f32 {
-        let weft = self.spec.weft as usize;
-        diagnostics::normal_offset(
-            &self.state,
-            &self.spec,
-            (i % weft) as u32,
-            (i / weft) as u32,
-        )
+        diagnostics::normal_offset(&self.state, &self.spec, i)
     }
 
     /// How well the elements' normals follow the surface: the share facing

@@ -47,16 +47,11 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
     let n = state.len();
     match by {
         ColorBy::None => vec![Color::from_rgb(220, 200, 160); n],
-        ColorBy::Strain => {
-            let mut strain = vec![0.0f32; n];
-            for p in &solver.topology().structural.items {
-                let len = state.position[p.b as usize].distance(state.position[p.a as usize]);
-                let s = ((len - p.rest) / p.rest).max(0.0);
-                strain[p.a as usize] = strain[p.a as usize].max(s);
-                strain[p.b as usize] = strain[p.b as usize].max(s);
-            }
-            strain.iter().map(|s| ramp(s / 0.1)).collect()
-        }
+        ColorBy::Strain => solver
+            .particle_strain()
+            .iter()
+            .map(|s| ramp(s / 0.1))
+            .collect(),
         ColorBy::NormalOffset => solver
             .normal_offsets()
             .iter()

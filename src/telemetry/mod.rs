@@ -241,12 +241,12 @@ impl Telemetry {
         )?;
         // Each particle's grid cell (i along the weft, j along the warp),
         // shown when a particle is hovered in the viewer.
-        let (nw, nn) = (spec.weft as u64, spec.warp as u64);
+        let cells = || (0..spec.len()).map(|k| spec.cell(k));
         rec.log_static(
             paths::PARTICLES,
             &rerun::AnyValues::default()
-                .with_component::<rerun::components::Count>("i", (0..nw * nn).map(|k| k % nw))
-                .with_component::<rerun::components::Count>("j", (0..nw * nn).map(|k| k / nw)),
+                .with_component::<rerun::components::Count>("i", cells().map(|(i, _)| i as u64))
+                .with_component::<rerun::components::Count>("j", cells().map(|(_, j)| j as u64)),
         )?;
         let triangles: Vec<[u32; 3]> = topo.triangles.clone();
         rec.log_static(

@@ -459,10 +459,9 @@ impl Progress {
 /// What the inspector shows of particle `i`.
 fn readout(scene: &Scene, i: usize) -> ParticleReadout {
     let solver = scene.solver();
-    let weft = solver.spec().weft;
     let mut r = ParticleReadout {
         index: i,
-        cell: (i as u32 % weft, i as u32 / weft),
+        cell: solver.spec().cell(i),
         strain: solver.particle_strain_at(i),
         normal_offset: solver.normal_offset_at(i),
         ..ParticleReadout::default()
