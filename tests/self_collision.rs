@@ -141,13 +141,21 @@ fn the_new_presets_never_pass_through_themselves() {
     }
 }
 
+/// `folding_sheet` at 12 × 12 with self-collision off: the fold passes
+/// through itself. (With facing off too: with it on, this fold happens to
+/// clear itself at 12 × 12. These tests check the crossing count and the
+/// contact search, not facing.)
+const CROSSING_FOLD: &[&str] = &[
+    "cloth.weft=12",
+    "cloth.warp=12",
+    "solver.weights.self=0",
+    "solver.weights.facing=0",
+];
+
 #[test]
 fn without_self_collision_the_fold_passes_through() {
     // The check above can fail: the same fold with the family off crosses.
-    let p = preset(
-        "folding_sheet",
-        &["cloth.weft=12", "cloth.warp=12", "solver.weights.self=0"],
-    );
+    let p = preset("folding_sheet", CROSSING_FOLD);
     let (worst, _) = worst_crossings(&p, false);
     assert!(worst > 0, "no crossing without self-collision");
 }
@@ -172,10 +180,7 @@ fn count_agrees_with_brute_force(p: &Preset, seconds: f32, count: impl Fn(&Solve
 
 #[test]
 fn the_solvers_count_agrees_with_brute_force() {
-    let p = preset(
-        "folding_sheet",
-        &["cloth.weft=12", "cloth.warp=12", "solver.weights.self=0"],
-    );
+    let p = preset("folding_sheet", CROSSING_FOLD);
     count_agrees_with_brute_force(&p, p.duration, Solver::self_crossings);
 }
 
@@ -337,8 +342,9 @@ fn one_particle_s_readout_matches_the_whole_cloth_s() {
         assert!(strain.iter().any(|v| *v > 0.0), "some edge is stretched");
         for f in Family::ALL {
             let each = s.particle_violation(f);
+            let measured = !f.measured_only_while_on() || s.params().weights[f] > 0.0;
             assert!(
-                f == Family::SelfCollision && weight == 0.0 || each.iter().any(|v| *v > 0.0),
+                !measured || each.iter().any(|v| *v > 0.0),
                 "{f:?} is violated somewhere"
             );
             for (i, v) in each.iter().enumerate() {

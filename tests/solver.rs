@@ -145,7 +145,9 @@ proptest! {
             for iteration in 0..20 {
                 s.step(&calm(), &[]).unwrap();
                 let now = s.violation(family).rms;
-                prop_assert!(now <= last * (1.0 + 1e-4), "{:?} rose at iteration {}: {} -> {}", family, iteration, last, now);
+                // Below 1e-7 (a unit vector's rounding, in radians) an
+                // angle is rounding, which may rise as well as fall.
+                prop_assert!(now <= last * (1.0 + 1e-4) || now < 1e-7, "{:?} rose at iteration {}: {} -> {}", family, iteration, last, now);
                 last = now;
             }
             prop_assert!(last < 0.5 * first, "{:?} barely decreased: {} -> {}", family, first, last);
@@ -766,4 +768,50 @@ proptest! {
             prop_assert!((ours - reference).length() <= 1e-5 * reference.length(), "{ours} vs {reference}");
         }
     }
+}
+
+#[test]
+fn facing_turns_an_element_that_faces_the_other_way_back() {
+    // One element of a flat sheet turned over, and one tilted: planarity
+    // alone cannot tell the turned one from a right one (it stays turned);
+    // facing alone turns both back to the surface, and moves nothing.
+    let (tilted_one, flipped_one) = (33, 55);
+    let start = |family: Family| {
+        let mut s = Solver::new(spec(9), only(family), &[]).unwrap();
+        let st = s.state_mut();
+        st.orientation[tilted_one] = Quat::from_rotation_x(0.4) * st.orientation[tilted_one];
+        st.orientation[flipped_one] =
+            Quat::from_rotation_x(std::f32::consts::PI - 0.01) * st.orientation[flipped_one];
+        s
+    };
+    let pi = std::f32::consts::PI;
+
+    let mut planar = start(Family::Planarity);
+    for _ in 0..20 {
+        planar.step(&calm(), &[]).unwrap();
+    }
+    assert!(
+        planar.normal_offset_at(flipped_one) > 0.5 * pi,
+        "planarity turned it back: {}",
+        planar.normal_offset_at(flipped_one)
+    );
+
+    let mut s = start(Family::Facing);
+    let before = s.state().position.clone();
+    assert!(s.violation(Family::Facing).max > pi - 0.02);
+    for _ in 0..20 {
+        s.step(&calm(), &[]).unwrap();
+    }
+    for k in [tilted_one, flipped_one] {
+        assert!(
+            s.normal_offset_at(k) < 1e-3,
+            "{k}: {}",
+            s.normal_offset_at(k)
+        );
+    }
+    assert_eq!(s.orientation().flipped, 0.0);
+    assert_eq!(s.state().position, before, "facing moved a particle");
+    // Its violation is the debugger's measure of the normals.
+    let worst = s.normal_offsets().into_iter().fold(0.0f32, f32::max);
+    assert_eq!(s.violation(Family::Facing).max, worst);
 }

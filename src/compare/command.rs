@@ -18,8 +18,9 @@ Exit codes: 0 compared; 1 a --fail-if bound regressed (a table says what); 2 bad
 what could be compared.
 
 --fail-if FIGURE OP LIMIT: the run fails when `value OP LIMIT` holds.
-  FIGURE  max_strain, max_violation.{stretch,planarity,normality,curvature},
-          final_energy, steps_per_second, wall_seconds, frames, sim_seconds
+  FIGURE  max_strain, max_violation.FAMILY (stretch, planarity, normality,
+          curvature, self, facing), final_energy, steps_per_second,
+          wall_seconds, frames, sim_seconds
   OP      >  >=  <  <=
   LIMIT   a number (checks every run), or relative to the first run A
           (checks every other run): A, 1.1*A, A*1.1, A+0.002, 1.1*A-0.001

@@ -3,7 +3,7 @@
 //! A bound is `FIGURE OP LIMIT`:
 //!
 //! - `FIGURE`: `max_strain`, `max_violation.FAMILY` (`stretch`, `planarity`,
-//!   `normality`, `curvature`), `final_energy`, `steps_per_second`,
+//!   `normality`, `curvature`, `self`, `facing`), `final_energy`, `steps_per_second`,
 //!   `wall_seconds`, `frames`, `sim_seconds`;
 //! - `OP`: `>`, `>=`, `<`, `<=`: the run *fails* when `value OP LIMIT` holds;
 //! - `LIMIT`: a number (`0.05`), or relative to the first run `A`:

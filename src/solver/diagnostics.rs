@@ -17,17 +17,15 @@
 
 use std::time::Duration;
 
-use glam::Vec3;
-
-use glam::Quat;
+use glam::{Quat, Vec3};
 
 use super::{
     cloth::{ClothSpec, ClothState},
     constraints::lanes::{Lane, V3, WIDE_LANES},
-    constraints::{Particles, Recorder, Shared, atan2},
+    constraints::{Particles, Recorder, Shared, atan2, facing},
     family::{Family, PerFamily},
     team::Crew,
-    topology::{Pair, Topology},
+    topology::{Pair, Patch, Topology},
 };
 
 /// Max and RMS of a family's violation over its pairs.
@@ -408,8 +406,9 @@ fn edge_strains<'a>(
 /// g = (x(i+1, j) − x(i−1, j)) × (x(i, j+1) − x(i, j−1))
 /// ```
 ///
-/// (one-sided at the border), which faces the way every element faced at
-/// rest. Planarity cannot tell `n` from `−n`, so an angle above 90° is an
+/// (one-sided at the border; [`Patch::surface_normal`]), which faces the way
+/// every element faced at rest: facing's violation, measured whatever its
+/// weight. Planarity cannot tell `n` from `−n`, so an angle above 90° is an
 /// element facing the other way. 0 where `g` vanishes (a particle whose
 /// neighbours coincide).
 pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
@@ -420,16 +419,7 @@ pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
 
 /// Particle `k`'s entry of [`normal_offsets`] (for inspecting one particle).
 pub fn normal_offset(state: &ClothState, spec: &ClothSpec, k: usize) -> f32 {
-    let (i, j) = spec.cell(k);
-    let at = |i: u32, j: u32| state.position[spec.index(i, j)];
-    let (left, right) = (i.saturating_sub(1), (i + 1).min(spec.weft - 1));
-    let (down, up) = (j.saturating_sub(1), (j + 1).min(spec.warp - 1));
-    let g = (at(right, j) - at(left, j)).cross(at(i, up) - at(i, down));
-    if g == Vec3::ZERO {
-        return 0.0;
-    }
-    let n = state.normal(k);
-    atan2(n.cross(g).length(), n.dot(g))
+    facing::violation(&state.position, |i| state.normal(i), Patch::of(spec, k))
 }
 
 /// How well the elements' normals follow the surface: see [`orientation`].

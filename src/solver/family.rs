@@ -24,7 +24,8 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use super::cloth::{ClothSpec, ClothState};
 use super::constraints::self_collision::{self, SelfContact};
 use super::constraints::{
-    Particles, Recorder, Shared, curvature, kernel, normality, planarity, project_batches, stretch,
+    Particles, Recorder, Shared, curvature, facing, kernel, normality, planarity, project_batches,
+    stretch,
 };
 use super::diagnostics::{Tally, Violation};
 use super::forced_rotation::ForcedRotation;
@@ -45,11 +46,14 @@ pub enum Family {
     Curvature,
     /// Cloth–cloth contact: the layers stay the thickness apart.
     SelfCollision,
+    /// Each element faces the way its surface does (weft's own; off by
+    /// default).
+    Facing,
 }
 
 impl Family {
     /// How many families there are.
-    pub const COUNT: usize = 5;
+    pub const COUNT: usize = 6;
 
     /// All families, in the order reports list them (the order the adjust
     /// phase projects them, see [`SWEEP`]).
@@ -57,6 +61,7 @@ impl Family {
         Family::Planarity,
         Family::Normality,
         Family::Curvature,
+        Family::Facing,
         Family::Stretch,
         Family::SelfCollision,
     ];
@@ -74,15 +79,16 @@ impl Family {
             Family::Normality => "normality",
             Family::Curvature => "curvature",
             Family::SelfCollision => "self",
+            Family::Facing => "facing",
         }
     }
 
     /// Whether the family's projections turn elements (planarity,
-    /// normality, curvature); the others only move them.
+    /// normality, curvature, facing); the others only move them.
     pub fn turns(self) -> bool {
         matches!(
             self,
-            Family::Planarity | Family::Normality | Family::Curvature
+            Family::Planarity | Family::Normality | Family::Curvature | Family::Facing
         )
     }
 
@@ -94,7 +100,17 @@ impl Family {
             Family::Normality => 0.2,
             Family::Curvature => 0.1,
             Family::SelfCollision => 0.0,
+            Family::Facing => 0.99,
         }
+    }
+
+    /// Whether the family's violation is measured only while the family is
+    /// on (its weight above 0): self-collision, whose measure is a contact
+    /// search, and facing, whose measure the debugger already takes as the
+    /// normals against the surface. The others are measured at any weight,
+    /// so that their plots show what switching them on would correct.
+    pub fn measured_only_while_on(self) -> bool {
+        matches!(self, Family::SelfCollision | Family::Facing)
     }
 
     /// The family of a name, as in presets.
@@ -110,11 +126,18 @@ impl Family {
         Family::Normality,
         Family::Curvature,
         Family::SelfCollision,
+        Family::Facing,
     ];
 
     /// Every family's name, in [`Family::index`] order (for "did you mean").
-    pub const NAMES: [&'static str; Self::COUNT] =
-        ["stretch", "planarity", "normality", "curvature", "self"];
+    pub const NAMES: [&'static str; Self::COUNT] = [
+        "stretch",
+        "planarity",
+        "normality",
+        "curvature",
+        "self",
+        "facing",
+    ];
 }
 
 /// How many times one adjust sweep projects the length limit.
@@ -126,17 +149,19 @@ impl Family {
 /// peak strain at 8 substeps × 2 iterations, for 7 % more time per sweep.
 pub const STRETCH_PASSES: usize = 3;
 
-/// The order of one adjust sweep: the surface families, then the length
-/// limit [`STRETCH_PASSES`] times, then self-collision, so that the layers
-/// are apart when the colliders take over. (Running the stretch passes'
-/// colours in alternating orders, symmetric Gauss–Seidel, was measured and
-/// raised peak strain on every preset.)
-pub const SWEEP: [Family; 4 + STRETCH_PASSES] = {
-    let mut sweep = [Family::Stretch; 4 + STRETCH_PASSES];
+/// The order of one adjust sweep: the surface families, facing last among
+/// them (so that the normals end each sweep on the surface the others left),
+/// then the length limit [`STRETCH_PASSES`] times, then self-collision, so
+/// that the layers are apart when the colliders take over. (Running the
+/// stretch passes' colours in alternating orders, symmetric Gauss–Seidel,
+/// was measured and raised peak strain on every preset.)
+pub const SWEEP: [Family; 5 + STRETCH_PASSES] = {
+    let mut sweep = [Family::Stretch; 5 + STRETCH_PASSES];
     sweep[0] = Family::Planarity;
     sweep[1] = Family::Normality;
     sweep[2] = Family::Curvature;
-    sweep[3 + STRETCH_PASSES] = Family::SelfCollision;
+    sweep[3] = Family::Facing;
+    sweep[4 + STRETCH_PASSES] = Family::SelfCollision;
     sweep
 };
 
@@ -309,6 +334,7 @@ pub(crate) struct Compliance {
     planarity: f32,
     normality: f32,
     curvature: f32,
+    facing: f32,
     self_contact: f32,
 }
 
@@ -322,6 +348,7 @@ impl Compliance {
             planarity: of(r.planarity, Family::Planarity),
             normality: of(r.normality, Family::Normality),
             curvature: of(r.curvature, Family::Curvature),
+            facing: of(r.facing, Family::Facing),
             self_contact: of(r.self_contact, Family::SelfCollision),
         }
     }
@@ -337,6 +364,7 @@ pub(crate) struct Multipliers {
     normality: Vec<f32>,
     planarity: Vec<[f32; 2]>,
     curvature: Vec<[f32; 2]>,
+    facing: Vec<f32>,
     pub(crate) self_contact: Vec<f32>,
 }
 
@@ -358,6 +386,7 @@ impl Multipliers {
         zero(&mut self.normality, topology.structural.len());
         zero2(&mut self.planarity, topology.structural.len());
         zero2(&mut self.curvature, topology.bend.len());
+        zero(&mut self.facing, topology.patches.len());
         zero(&mut self.self_contact, contacts);
     }
 
@@ -370,6 +399,7 @@ impl Multipliers {
             normality: Shared::new(&mut self.normality),
             planarity: Shared::new(&mut self.planarity),
             curvature: Shared::new(&mut self.curvature),
+            facing: Shared::new(&mut self.facing),
             self_contact: Shared::new(&mut self.self_contact),
         }
     }
@@ -384,6 +414,7 @@ pub(crate) struct SharedMultipliers<'a> {
     normality: Shared<'a, f32>,
     planarity: Shared<'a, [f32; 2]>,
     curvature: Shared<'a, [f32; 2]>,
+    facing: Shared<'a, f32>,
     self_contact: Shared<'a, f32>,
 }
 
@@ -502,6 +533,17 @@ impl Sweep<'_> {
                     )),
                 );
             }
+            Family::Facing => {
+                let patches = &topology.patches;
+                project_batches(
+                    crew,
+                    &patches.items,
+                    &mu.facing,
+                    &patches.batches,
+                    rec,
+                    kernel!(|c, m, n, r| facing::project::<F, _>(p, c, m, n, k.facing, rot, r)),
+                );
+            }
             Family::SelfCollision => {
                 project_batches(
                     crew,
@@ -541,6 +583,7 @@ pub fn violation(
         }),
         Family::Normality => stats(&[&topology.structural], |p| normality::violation(normal, p)),
         Family::Curvature => stats(&[&topology.bend], |p| curvature::violation(x, p)),
+        Family::Facing => stats(&[&topology.patches], |p| facing::violation(x, normal, p)),
         Family::SelfCollision => {
             let mut depths = Vec::new();
             self_collision::for_each_close(x, topology, spec, |_, _, d| depths.push(d));
@@ -550,16 +593,16 @@ pub fn violation(
 }
 
 /// Every family's violation, as [`violation`] measures each, on up to
-/// `threads` threads (self-collision's only with `self_collision`, else 0).
+/// `threads` threads, for the families `measured` names (0 for the others).
 /// The structural pairs are measured once for the three families that share
-/// them, in blocks whose tallies merge in block order, so the figures do not
-/// depend on the threads.
+/// them, and every set in blocks whose tallies merge in block order, so the
+/// figures do not depend on the threads.
 pub fn violations(
     state: &ClothState,
     topology: &Topology,
     spec: &ClothSpec,
     threads: usize,
-    self_collision: bool,
+    measured: impl Fn(Family) -> bool,
 ) -> PerFamily<Violation> {
     const BLOCK: usize = 1024;
     let x = &state.position;
@@ -580,24 +623,36 @@ pub fn violations(
             all.merge(t);
         }
     }
-    let mut of_bends = Tally::default();
-    for t in team::run_blocks(threads, bends.len(), BLOCK, |r| {
-        let mut t = Tally::default();
-        bends[r]
-            .iter()
-            .for_each(|&b| t.add(curvature::violation(x, b)));
-        t
-    }) {
-        of_bends.merge(t);
-    }
+    let of_bends = tally(threads, bends, |b| curvature::violation(x, b));
+    let of_patches = measured(Family::Facing).then(|| {
+        tally(threads, &topology.patches.items, |p| {
+            facing::violation(x, normal, p)
+        })
+    });
     PerFamily::from_fn(|family| match family {
+        _ if !measured(family) => Violation::default(),
         Family::Stretch => of_pairs[0].violation(),
         Family::Planarity => of_pairs[1].violation(),
         Family::Normality => of_pairs[2].violation(),
         Family::Curvature => of_bends.violation(),
-        Family::SelfCollision if self_collision => violation(family, state, topology, spec),
-        Family::SelfCollision => Violation::default(),
+        Family::Facing => of_patches.unwrap_or_default().violation(),
+        Family::SelfCollision => violation(family, state, topology, spec),
     })
+}
+
+/// One violation of each item, tallied in blocks on up to `threads`
+/// threads and merged in block order.
+fn tally<T: Copy + Sync>(threads: usize, items: &[T], f: impl Fn(T) -> f32 + Sync) -> Tally {
+    const BLOCK: usize = 1024;
+    let mut all = Tally::default();
+    for t in team::run_blocks(threads, items.len(), BLOCK, |r| {
+        let mut t = Tally::default();
+        items[r].iter().for_each(|&c| t.add(f(c)));
+        t
+    }) {
+        all.merge(t);
+    }
+    all
 }
 
 /// Per particle, the largest violation of `family` over the constraints
@@ -671,6 +726,11 @@ fn each_violation(
             planarity::violation(x, normal, p)
         }),
         Family::Normality => pairs(&topology.structural, &|p| normality::violation(normal, p)),
+        Family::Facing => {
+            for &p in topology.patches.items.iter().filter(|p| wanted(&[p.at])) {
+                put(p.at, facing::violation(x, normal, p));
+            }
+        }
         Family::Curvature => {
             for &t in topology
                 .bend

@@ -10,8 +10,10 @@
 //!    driven particles follow their attachment exactly.
 //! 2. **adjust** ([`constraints`]): `iterations` sweeps over four families of
 //!    geometric constraints between neighbours, each weighted by its `λ`:
-//!    planarity, normality (with shear), curvature, then stretch (the length
-//!    limit has the last word). Families are projected one after another
+//!    planarity, normality (with shear), curvature, facing (weft's own: each
+//!    element turns to face the way the surface its neighbours make does,
+//!    [`constraints::facing`]), then stretch (the length limit has the last
+//!    word). Families are projected one after another
 //!    (Gauss–Seidel), so a particle's correction combines what each asks.
 //!    Each weight is a compliance (XPBD), so its effect does not depend on
 //!    iterations, substeps or resolution ([`params::Weights`]); rotations
@@ -423,24 +425,24 @@ impl Solver {
     }
 
     /// The violations a run's figures report: as [`Solver::violation`] for
-    /// every family, but self-collision's only while the family is on (its
-    /// measure is a contact search; off, it reports 0). Measured on the
-    /// solver's threads.
+    /// every family, but self-collision's and facing's only while the family
+    /// is on ([`Family::measured_only_while_on`]; off, they report 0).
+    /// Measured on the solver's threads.
     pub fn measured_violations(&self) -> PerFamily<Violation> {
         family::violations(
             &self.state,
             &self.topology,
             &self.spec,
             self.threads(),
-            self.self_collision_on(),
+            |f| self.measured(f),
         )
     }
 
     /// Per particle, the largest violation of `family` among the
-    /// constraints that involve it; self-collision's only while the family
-    /// is on (0 otherwise), as in [`Solver::measured_violations`].
+    /// constraints that involve it; self-collision's and facing's only while
+    /// the family is on (0 otherwise), as in [`Solver::measured_violations`].
     pub fn particle_violation(&self, family: Family) -> Vec<f32> {
-        if family == Family::SelfCollision && !self.self_collision_on() {
+        if !self.measured(family) {
             return vec![0.0; self.state.len()];
         }
         family::particle_violation(family, &self.state, &self.topology, &self.spec)
@@ -450,7 +452,7 @@ impl Solver {
     /// the constraints that involve it alone: what inspecting one particle
     /// needs, at a fraction of the cost.
     pub fn particle_violation_at(&self, family: Family, i: usize) -> f32 {
-        if family == Family::SelfCollision && !self.self_collision_on() {
+        if !self.measured(family) {
             return 0.0;
         }
         family::particle_violation_at(family, &self.state, &self.topology, &self.spec, i)
@@ -744,6 +746,12 @@ impl Solver {
     /// Whether the self-collision family is on (its weight above 0).
     fn self_collision_on(&self) -> bool {
         self.params.weights[Family::SelfCollision] > 0.0
+    }
+
+    /// Whether `family`'s violation is measured: always, or for the
+    /// families measured only while on, while its weight is above 0.
+    fn measured(&self, family: Family) -> bool {
+        !family.measured_only_while_on() || self.params.weights[family] > 0.0
     }
 
     /// Finds this substep's self-contacts over the predicted positions (timed

@@ -47,6 +47,10 @@ pub struct ReferenceCompliance {
     /// Curvature angles, 1/(N·m): the inverse of the bending rigidity `B`
     /// (1e-5 N·m at `λ = ½`, a light cotton).
     pub curvature: f32,
+    /// Facing angles, 1/(N·m): the inverse of the rigidity with which each
+    /// element turns to face the way its surface does (1e-5 N·m at `λ = ½`;
+    /// per element, whatever the resolution).
+    pub facing: f32,
     /// Self-contacts, m/N: how far a pressed layer gives into the thickness
     /// (1 mm per newton at `λ = ½`; the default, `λ = 1`, gives nothing).
     pub self_contact: f32,
@@ -59,6 +63,7 @@ pub const REFERENCE_COMPLIANCE: ReferenceCompliance = ReferenceCompliance {
     planarity: 1e5,
     normality: 1e5,
     curvature: 1e5,
+    facing: 1e5,
     self_contact: 1e-3,
 };
 

@@ -4,7 +4,9 @@
 //! - **structural** edges between direct neighbours along the weft and the warp;
 //! - **shear** diagonals across every grid cell (both diagonals);
 //! - **bend** triples: pairs two apart along the weft and the warp, with the
-//!   particle between them.
+//!   particle between them;
+//! - and, for facing, every particle's **patch**: the particle with its
+//!   neighbours before and after it along the weft and the warp.
 //!
 //! Each set is graph-coloured: no two constraints in one colour share a
 //! particle, so the constraints of a colour can be projected in any order, or
@@ -13,6 +15,8 @@
 //! order, so it is deterministic.
 
 use std::ops::Range;
+
+use glam::Vec3;
 
 use super::cloth::ClothSpec;
 
@@ -46,6 +50,53 @@ pub struct Triple {
     pub aspect: f32,
 }
 
+/// A particle and the neighbours its surface normal is taken from: before
+/// and after it along the weft (`left`, `right`) and the warp (`down`,
+/// `up`), the particle itself in place of a missing one at the border.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Patch {
+    /// The particle.
+    pub at: u32,
+    /// Its neighbour before it along the weft (or itself, at the border).
+    pub left: u32,
+    /// Its neighbour after it along the weft (or itself).
+    pub right: u32,
+    /// Its neighbour before it along the warp (or itself).
+    pub down: u32,
+    /// Its neighbour after it along the warp (or itself).
+    pub up: u32,
+}
+
+impl Patch {
+    /// Particle `k`'s patch on `spec`'s grid.
+    pub fn of(spec: &ClothSpec, k: usize) -> Self {
+        let (i, j) = spec.cell(k);
+        let at = |i: u32, j: u32| spec.index(i, j) as u32;
+        Self {
+            at: k as u32,
+            left: at(i.saturating_sub(1), j),
+            right: at((i + 1).min(spec.weft - 1), j),
+            down: at(i, j.saturating_sub(1)),
+            up: at(i, (j + 1).min(spec.warp - 1)),
+        }
+    }
+
+    /// The normal of the surface around the particle, unnormalised: the
+    /// cross product of its chords along the weft and the warp,
+    ///
+    /// ```text
+    /// g = (x(i+1, j) − x(i−1, j)) × (x(i, j+1) − x(i, j−1))
+    /// ```
+    ///
+    /// one-sided at the border. It faces the way every element faced at
+    /// rest, and is zero where the chords are parallel or vanish.
+    #[inline]
+    pub fn surface_normal(&self, x: &[Vec3]) -> Vec3 {
+        let at = |i: u32| x[i as usize];
+        (at(self.right) - at(self.left)).cross(at(self.up) - at(self.down))
+    }
+}
+
 /// A constraint's particles, for colouring.
 pub trait Touches {
     /// The particles the constraint reads and writes.
@@ -55,6 +106,14 @@ pub trait Touches {
 impl Touches for Pair {
     fn particles(&self) -> impl Iterator<Item = u32> {
         [self.a, self.b].into_iter()
+    }
+}
+
+/// Facing turns the particle's element alone and moves nothing, so the
+/// patches of a sweep share no particle they write.
+impl Touches for Patch {
+    fn particles(&self) -> impl Iterator<Item = u32> {
+        std::iter::once(self.at)
     }
 }
 
@@ -167,6 +226,8 @@ pub struct Topology {
     pub shear: PairSet,
     /// Pairs two apart along the weft and the warp, with their middles.
     pub bend: TripleSet,
+    /// Every particle's patch, for facing (one colour).
+    pub patches: Batched<Patch>,
     /// Triangles of the cloth surface (two per cell), for meshes.
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle, which of its edges lie on the cloth's border ([`rim`]).
@@ -253,6 +314,7 @@ impl Topology {
             structural: PairSet::coloured(structural, n),
             shear: PairSet::coloured(shear, n),
             bend: TripleSet::coloured(bend, n),
+            patches: Batched::coloured((0..n).map(|k| Patch::of(spec, k)).collect(), n),
             rims: triangles.iter().map(|&t| rim(t, spec)).collect(),
             triangles,
         }
@@ -297,6 +359,7 @@ mod tests {
                 assert_eq!(set.batches.last().map_or(0, |b| b.end), set.len());
             }
             assert!(colours_are_independent(&t.bend, n), "{nx} × {ny}");
+            assert_eq!(t.patches.batches, vec![0..n], "{nx} × {ny}");
             assert!(t.structural.batches.len() <= 4 && t.bend.batches.len() <= 6);
         }
     }

@@ -14,6 +14,7 @@ pub fn family(f: Family) -> Color {
         Family::Normality => Color::from_rgb(120, 200, 90),
         Family::Curvature => Color::from_rgb(230, 170, 50),
         Family::SelfCollision => Color::from_rgb(200, 90, 220),
+        Family::Facing => Color::from_rgb(240, 120, 160),
     }
 }
 

@@ -9,6 +9,7 @@
 //! | planarity | `α = asin(n_a · ŝ)`, zero iff `n_a · s = 0` | `∓ n⊥ / |s|` | unit `n_a × ŝ` (the paper's `v`) |
 //! | normality | `∠(n_a, n_b)`; shear: diagonal `|s| − L` | —; `∓ ŝ` | `n_a × n_b`; — |
 //! | curvature | sagitta angle `2 n̂⊥ · (x_m − ½(x_a + x_b)) / L`; bend angle | `n̂⊥`, `−½ n̂⊥` | `(n_a + n_b) × s` |
+//! | facing | `∠(n, g)`, `g` the normal of the particle's patch ([`facing`]) | — (the surface leads) | `−(n × g) / |n × g|` |
 //! | self | `s (x_p − y) · n̄ − h ≥ 0`, one-sided: a particle against a triangle's foot `y` ([`self_collision`]) | `s n̄`, `−β_k s n̄` | — |
 //!
 //! with `s = x_b − x_a`, `n⊥` the normal made perpendicular to the edge and
@@ -36,6 +37,7 @@
 #[cfg(target_arch = "x86_64")]
 pub(crate) mod avx;
 pub mod curvature;
+pub mod facing;
 pub(crate) mod lanes;
 pub mod normality;
 pub mod planarity;
@@ -531,6 +533,60 @@ pub(crate) fn turn<R: Recorder>(p: &Particles, i: usize, omega: Vec3, rec: &mut 
 #[inline]
 pub(crate) fn shift(p: &Particles, i: usize, dx: Vec3) {
     p.set_x(i, p.x(i) + dx);
+}
+
+/// The unit axis that turns the normal `n` toward `target` (of any length)
+/// and the angle between them, for normality and facing, which handle in
+/// lanes the lanes where `|n × target| > tiny` and call this for the rest:
+/// `None` when they agree (or `target` vanishes); exactly opposite, the
+/// axis is `n × hint` (any axis across `n` where `hint` lies along it), by
+/// the full angle `π`, so that a flipped element has a way back.
+#[inline(always)]
+pub(crate) fn axis_angle(n: Vec3, target: Vec3, hint: Vec3, tiny: f32) -> Option<(Vec3, f32)> {
+    let axis = n.cross(target);
+    let sin = axis.length();
+    if sin > tiny {
+        return Some((axis * sin.recip(), atan2(sin, n.dot(target))));
+    }
+    if n.dot(target) >= 0.0 {
+        return None;
+    }
+    let across = n
+        .cross(hint)
+        .try_normalize()
+        .unwrap_or_else(|| n.any_orthonormal_vector());
+    Some((across, std::f32::consts::PI))
+}
+
+/// [`axis_angle`] lane by lane: the regular case in lanes, the lanes of
+/// `on` where `|n × target| ≤ tiny` alone, with `hint(k)` for lane `k`;
+/// a lane whose normal already agrees is switched off in `on`.
+#[inline(always)]
+pub(crate) fn axis_angle_lanes<F: Lane>(
+    n: lanes::V3<F>,
+    target: lanes::V3<F>,
+    tiny: f32,
+    on: &mut F,
+    hint: impl Fn(usize) -> Vec3,
+) -> (lanes::V3<F>, F) {
+    let axis = n.cross(target);
+    let sin = axis.length();
+    let mut axis = axis * (F::ONE / sin);
+    let mut angle = lanes::atan2(sin, n.dot(target));
+    let odd = *on & !sin.simd_gt(tiny);
+    if odd.any() {
+        let bits = odd.to_bitmask();
+        for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
+            match axis_angle(n.lane(k), target.lane(k), hint(k), tiny) {
+                Some((ax, an)) => {
+                    axis.set_lane(k, ax);
+                    angle.set(k, an);
+                }
+                None => on.set(k, 0.0),
+            }
+        }
+    }
+    (axis, angle)
 }
 
 /// `atan2(y, x)`, without a libm call: [`atan`] of `y / x` with the

@@ -22,6 +22,10 @@ use super::lanes::{self, Chunk, Lane};
 use super::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
 
+/// `|n_a × n_b|` at or below which two normals are taken as parallel or
+/// opposite ([`super::axis_angle`]).
+const TINY: f32 = 1e-9;
+
 /// Projects the normals of up to `F::N` edges of one
 /// colour toward each other, side by side, with compliance `alpha_t`
 /// (`α / Δt²`, for a square cell).
@@ -47,25 +51,8 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     }
     let (qa, qb) = (a.q(p), b.q(p));
     let (na, nb) = (qa.normal(), qb.normal());
-    // `axis_angle`, lane by lane: the regular case in lanes, the rest alone.
-    let axis = na.cross(nb);
-    let sin = axis.length();
-    let mut axis = axis * (F::ONE / sin);
-    let mut angle = lanes::atan2(sin, na.dot(nb));
-    let odd = on & !sin.simd_gt(1e-9);
-    if odd.any() {
-        let bits = odd.to_bitmask();
-        for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
-            let edge = p.x(b.at(k)) - p.x(a.at(k));
-            match axis_angle(na.lane(k), nb.lane(k), edge) {
-                Some((ax, an)) => {
-                    axis.set_lane(k, ax);
-                    angle.set(k, an);
-                }
-                None => on.set(k, 0.0),
-            }
-        }
-    }
+    let (axis, angle) =
+        super::axis_angle_lanes(na, nb, TINY, &mut on, |k| p.x(b.at(k)) - p.x(a.at(k)));
     let mut m = lanes::load::<F>(mu);
     let d = lanes::delta_mu(
         angle,
@@ -79,25 +66,6 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     lanes::store(m, mu);
     a.turn(p, qa, axis * (-ba * d), on & ba.simd_gt(0.0), rec);
     b.turn(p, qb, axis * (bb * d), on & bb.simd_gt(0.0), rec);
-}
-
-/// The unit axis that turns `na` toward `nb`, and the angle between them;
-/// `None` when they agree. Exactly opposite normals turn about `na × edge`.
-#[inline(always)]
-fn axis_angle(na: Vec3, nb: Vec3, edge: Vec3) -> Option<(Vec3, f32)> {
-    let axis = na.cross(nb);
-    let sin = axis.length();
-    if sin > 1e-9 {
-        return Some((axis * sin.recip(), super::atan2(sin, na.dot(nb))));
-    }
-    if na.dot(nb) >= 0.0 {
-        return None;
-    }
-    let across = na
-        .cross(edge)
-        .try_normalize()
-        .unwrap_or_else(|| na.any_orthonormal_vector());
-    Some((across, std::f32::consts::PI))
 }
 
 /// The angle between the two normals, in radians.
