@@ -46,8 +46,7 @@ pub enum Family {
     Curvature,
     /// Cloth–cloth contact: the layers stay the thickness apart.
     SelfCollision,
-    /// Each element faces the way its surface does (weft's own; off by
-    /// default).
+    /// Each element faces the way its surface does (weft's own).
     Facing,
 }
 

@@ -1,5 +1,5 @@
 //! Facing: each element's normal follows the surface its neighbours make,
-//! facing the same way (weft's own family; off by default).
+//! facing the same way (weft's own family, on by default at `λ = 0.99`).
 //!
 //! Planarity ties a normal to the edges around it only up to its sign, and
 //! softly; a flag flaps faster than that tie holds, and its elements lag and
