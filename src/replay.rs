@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use crate::scene::{Scene, Tuning, load};
+use crate::solver::Family;
 use crate::telemetry::read;
 
 /// What a replay found.
@@ -34,6 +35,25 @@ impl Replayed {
     }
 }
 
+/// Parameters as a recording stores them. A recording stores every
+/// family's weight; one made before a family existed has none for it, and
+/// ran without it, so that family's weight is 0, not today's default
+/// (facing, added on 2026-11-26 with a default of 0.99).
+pub(crate) fn stored_tuning(text: &str) -> Result<Tuning, toml::de::Error> {
+    let mut tuning: Tuning = toml::from_str(text)?;
+    let table: toml::Table = toml::from_str(text)?;
+    let weights = table
+        .get("solver")
+        .and_then(|s| s.get("weights"))
+        .and_then(|w| w.as_table());
+    for family in Family::ALL {
+        if weights.is_some_and(|w| !w.contains_key(family.name())) {
+            tuning.solver.weights[family] = 0.0;
+        }
+    }
+    Ok(tuning)
+}
+
 /// Re-runs the recording at `path`.
 pub fn replay(path: &Path) -> Result<Replayed, String> {
     let rec = read::read(path)?;
@@ -58,8 +78,8 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
 
     let mut changes: Vec<(u64, Tuning)> = Vec::new();
     for (frame, text) in &rec.params {
-        let tuning: Tuning =
-            toml::from_str(text).map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
+        let tuning =
+            stored_tuning(text).map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
         changes.push((*frame as u64, tuning));
     }
     let mut scene = Scene::new(&preset).map_err(|e| e.to_string())?;
@@ -98,4 +118,30 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
         changes: changes.len().saturating_sub(1),
         truncated: rec.truncated,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_family_missing_from_stored_parameters_was_off() {
+        let preset = load::load("flag_on_car", &[]).unwrap().preset;
+        let text = toml::to_string(&Tuning::of(&preset)).unwrap();
+        assert!(text.contains("facing = 0.99"), "{text}");
+        // As this build stores them: every weight kept.
+        let now = stored_tuning(&text).unwrap();
+        assert_eq!(now, Tuning::of(&preset));
+        // As a build before facing stored them: facing was off.
+        let before: String = text
+            .lines()
+            .filter(|l| !l.starts_with("facing"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let then = stored_tuning(&before).unwrap();
+        assert_eq!(then.solver.weights[Family::Facing], 0.0);
+        let mut expected = Tuning::of(&preset);
+        expected.solver.weights[Family::Facing] = 0.0;
+        assert_eq!(then, expected);
+    }
 }

@@ -97,7 +97,7 @@ impl RunData {
         let mut changes = Vec::new();
         let mut last: Option<Tuning> = None;
         for (frame, text) in &rec.params {
-            let Ok(t) = toml::from_str::<Tuning>(text) else {
+            let Ok(t) = crate::replay::stored_tuning(text) else {
                 continue;
             };
             if let Some(old) = &last
