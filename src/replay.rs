@@ -40,16 +40,18 @@ impl Replayed {
 /// ran without it, so that family's weight is 0, not today's default
 /// (facing, added on 2026-11-26 with a default of 0.99).
 pub(crate) fn stored_tuning(text: &str) -> Result<Tuning, toml::de::Error> {
-    let mut tuning: Tuning = toml::from_str(text)?;
     let table: toml::Table = toml::from_str(text)?;
     let weights = table
         .get("solver")
         .and_then(|s| s.get("weights"))
         .and_then(|w| w.as_table());
-    for family in Family::ALL {
-        if weights.is_some_and(|w| !w.contains_key(family.name())) {
-            tuning.solver.weights[family] = 0.0;
-        }
+    let missing: Vec<Family> = Family::ALL
+        .into_iter()
+        .filter(|f| weights.is_some_and(|w| !w.contains_key(f.name())))
+        .collect();
+    let mut tuning: Tuning = table.try_into()?;
+    for family in missing {
+        tuning.solver.weights[family] = 0.0;
     }
     Ok(tuning)
 }

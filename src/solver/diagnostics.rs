@@ -20,7 +20,7 @@ use std::time::Duration;
 use glam::{Quat, Vec3};
 
 use super::{
-    cloth::{ClothSpec, ClothState},
+    cloth::ClothState,
     constraints::lanes::{Lane, V3, WIDE_LANES},
     constraints::{Particles, Recorder, Shared, atan2, facing},
     family::{Family, PerFamily},
@@ -411,15 +411,15 @@ fn edge_strains<'a>(
 /// weight. Planarity cannot tell `n` from `−n`, so an angle above 90° is an
 /// element facing the other way. 0 where `g` vanishes (a particle whose
 /// neighbours coincide).
-pub fn normal_offsets(state: &ClothState, spec: &ClothSpec) -> Vec<f32> {
-    (0..state.len())
-        .map(|k| normal_offset(state, spec, k))
-        .collect()
+pub fn normal_offsets(state: &ClothState, topology: &Topology) -> Vec<f32> {
+    let patches = topology.patches.items.iter();
+    patches.map(|&p| normal_offset(state, p)).collect()
 }
 
-/// Particle `k`'s entry of [`normal_offsets`] (for inspecting one particle).
-pub fn normal_offset(state: &ClothState, spec: &ClothSpec, k: usize) -> f32 {
-    facing::violation(&state.position, |i| state.normal(i), Patch::of(spec, k))
+/// The entry of [`normal_offsets`] for `patch`'s particle (for inspecting
+/// one particle).
+pub fn normal_offset(state: &ClothState, patch: Patch) -> f32 {
+    facing::violation(&state.position, |i| state.normal(i), patch)
 }
 
 /// How well the elements' normals follow the surface: see [`orientation`].

@@ -472,12 +472,12 @@ impl Solver {
     /// Per element, the angle between its normal and the surface's
     /// ([`diagnostics::normal_offsets`]; above 90°: facing the other way).
     pub fn normal_offsets(&self) -> Vec<f32> {
-        diagnostics::normal_offsets(&self.state, &self.spec)
+        diagnostics::normal_offsets(&self.state, &self.topology)
     }
 
     /// Particle `i`'s entry of [`Solver::normal_offsets`], on its own.
     pub fn normal_offset_at(&self, i: usize) -> f32 {
-        diagnostics::normal_offset(&self.state, &self.spec, i)
+        diagnostics::normal_offset(&self.state, self.topology.patches.items[i])
     }
 
     /// How well the elements' normals follow the surface: the share facing

@@ -226,7 +226,8 @@ pub struct Topology {
     pub shear: PairSet,
     /// Pairs two apart along the weft and the warp, with their middles.
     pub bend: TripleSet,
-    /// Every particle's patch, for facing (one colour).
+    /// Every particle's patch, for facing: one colour, in particle order
+    /// (patch `k` is particle `k`'s).
     pub patches: Batched<Patch>,
     /// Triangles of the cloth surface (two per cell), for meshes.
     pub triangles: Vec<[u32; 3]>,
@@ -360,6 +361,13 @@ mod tests {
             }
             assert!(colours_are_independent(&t.bend, n), "{nx} × {ny}");
             assert_eq!(t.patches.batches, vec![0..n], "{nx} × {ny}");
+            assert!(
+                t.patches
+                    .items
+                    .iter()
+                    .enumerate()
+                    .all(|(k, p)| p.at as usize == k)
+            );
             assert!(t.structural.batches.len() <= 4 && t.bend.batches.len() <= 6);
         }
     }
