@@ -9,6 +9,11 @@
 //! The figures these tests print (`cargo test --test cloth -- --nocapture`)
 //! are the tables in `docs/method.md`.
 
+// Tests and benchmarks set their scenes up with glam's rotations and
+// compare with the standard library: they run on one machine, so the
+// platform's math library is fine here (see `solver::portable`).
+#![allow(clippy::disallowed_methods)]
+
 use glam::{Quat, Vec3};
 use weft::solver::{
     ClothSpec, Collider, Environment, Family, Params, Pose, Shape, Solver, Weights,

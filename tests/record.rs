@@ -2,6 +2,11 @@
 //! levels and `--log-every`; verdicts; nothing lost on Ctrl-C or failure;
 //! bit-for-bit replay.
 
+// Tests and benchmarks set their scenes up with glam's rotations and
+// compare with the standard library: they run on one machine, so the
+// platform's math library is fine here (see `solver::portable`).
+#![allow(clippy::disallowed_methods)]
+
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 

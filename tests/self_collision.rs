@@ -4,6 +4,11 @@
 //! layers apart monotonically; results are bit-identical for any thread
 //! count; bad values are refused.
 
+// Tests and benchmarks set their scenes up with glam's rotations and
+// compare with the standard library: they run on one machine, so the
+// platform's math library is fine here (see `solver::portable`).
+#![allow(clippy::disallowed_methods)]
+
 use glam::{DVec3, Vec3};
 use weft::scene::load::{self, Override};
 use weft::scene::{Scene, preset::Preset};

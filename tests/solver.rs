@@ -2,6 +2,11 @@
 //! damping, Eq. 3, stability under abrupt motion, settling, determinism and
 //! validation.
 
+// Tests and benchmarks set their scenes up with glam's rotations and
+// compare with the standard library: they run on one machine, so the
+// platform's math library is fine here (see `solver::portable`).
+#![allow(clippy::disallowed_methods)]
+
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 use weft::solver::update::wind_acceleration;

@@ -22,7 +22,7 @@ pub mod preset;
 pub mod shipped;
 pub mod tuning;
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
 
 pub use load::{Loaded, Override, PresetError};
 pub use preset::Preset;
@@ -215,13 +215,14 @@ impl Scene {
 /// its direction, from a fixed sum of sines (deterministic, never negative
 /// gusts).
 pub fn wind_at(w: &WindSection, t: f32) -> Vec3 {
+    use crate::solver::portable::{rotation_z, sin};
     use std::f32::consts::TAU;
     if w.gust_period <= 0.0 || (w.gust == 0.0 && w.sway == 0.0) {
         return w.velocity;
     }
     let p = t / w.gust_period;
-    let gust = w.gust * (0.6 * (TAU * p).sin() + 0.4 * (TAU * 2.3 * p + 1.3).sin()).max(0.0);
-    let sway = w.sway.to_radians() * (TAU * 0.43 * p + 0.7).sin();
+    let gust = w.gust * (0.6 * sin(TAU * p) + 0.4 * sin(TAU * 2.3 * p + 1.3)).max(0.0);
+    let sway = w.sway.to_radians() * sin(TAU * 0.43 * p + 0.7);
     let dir = w.velocity.try_normalize().unwrap_or(Vec3::X);
-    Quat::from_rotation_z(sway) * (w.velocity + dir * gust)
+    rotation_z(sway) * (w.velocity + dir * gust)
 }

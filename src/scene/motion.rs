@@ -11,10 +11,11 @@
 //! that grows as time advances, so any time is evaluated deterministically.
 //! The world is Z-up; a body's local +X is forward, +Y left.
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
 
 use super::preset::{BodySection, CarMotion, Interpolation, KeyframeMotion, RunnerMotion, euler};
 use crate::solver::Pose;
+use crate::solver::portable::{atan2, cos, rotation_x, rotation_y, rotation_z, sin};
 
 /// Rate at which car and runner paths are integrated, in samples per second.
 const PATH_RATE: f32 = 960.0;
@@ -212,7 +213,7 @@ impl Path {
                 }
             }
             self.samples.push(Sample {
-                xy: [s.xy[0] + v * mid.cos() * dt, s.xy[1] + v * mid.sin() * dt],
+                xy: [s.xy[0] + v * cos(mid) * dt, s.xy[1] + v * sin(mid) * dt],
                 heading,
                 distance,
                 body,
@@ -235,11 +236,9 @@ impl Path {
         match &self.driver {
             Driver::Car(c) => {
                 let [front, rear, left, right] = body;
-                let pitch = (front - rear).atan2(c.wheelbase);
-                let roll = (left - right).atan2(c.track);
-                let rotation = Quat::from_rotation_z(heading)
-                    * Quat::from_rotation_y(-pitch)
-                    * Quat::from_rotation_x(roll);
+                let pitch = atan2(front - rear, c.wheelbase);
+                let roll = atan2(left - right, c.track);
+                let rotation = rotation_z(heading) * rotation_y(-pitch) * rotation_x(roll);
                 Pose::new(
                     Vec3::new(x, y, c.start.z + 0.5 * (front + rear)),
                     rotation.normalize(),
@@ -247,11 +246,10 @@ impl Path {
             }
             Driver::Runner(r) => {
                 let phase = std::f32::consts::PI * r.stride_frequency * t;
-                let z = r.start.z + r.bob * phase.sin().abs();
-                let sway = 0.05 * phase.sin();
-                let rotation = Quat::from_rotation_z(heading)
-                    * Quat::from_rotation_y(r.lean.to_radians())
-                    * Quat::from_rotation_x(sway);
+                let z = r.start.z + r.bob * sin(phase).abs();
+                let sway = 0.05 * sin(phase);
+                let rotation =
+                    rotation_z(heading) * rotation_y(r.lean.to_radians()) * rotation_x(sway);
                 Pose::new(Vec3::new(x, y, z), rotation.normalize())
             }
         }
@@ -265,7 +263,7 @@ pub fn road_height(car: &CarMotion, s: f32, lateral: f32) -> f32 {
     for b in &car.road.bumps {
         let u = (s - b.at) / b.length;
         if (0.0..=1.0).contains(&u) {
-            z += b.height * 0.5 * (1.0 - (TAU * u).cos());
+            z += b.height * 0.5 * (1.0 - cos(TAU * u));
         }
     }
     for r in &car.road.rough {
@@ -274,8 +272,7 @@ pub fn road_height(car: &CarMotion, s: f32, lateral: f32) -> f32 {
         if fade > 0.0 {
             let p = TAU * s / r.wavelength;
             let q = 1.3 * lateral;
-            z +=
-                r.amplitude * fade * (0.6 * (p + q).sin() + 0.4 * (2.71 * p + 1.1 + 2.0 * q).sin());
+            z += r.amplitude * fade * (0.6 * sin(p + q) + 0.4 * sin(2.71 * p + 1.1 + 2.0 * q));
         }
     }
     z

@@ -287,7 +287,7 @@ pub fn turn_by(q: Quat, r: Vec3) -> Quat {
         Quat::from_xyzw(r.x * s, r.y * s, r.z * s, c)
     } else if t2.is_finite() {
         let t = t2.sqrt();
-        let (s, c) = (0.5 * t).sin_cos();
+        let (s, c) = super::portable::sin_cos(0.5 * t);
         let r = r * (s / t);
         Quat::from_xyzw(r.x, r.y, r.z, c)
     } else {

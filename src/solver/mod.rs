@@ -50,6 +50,7 @@ pub mod diagnostics;
 pub mod family;
 pub mod forced_rotation;
 pub mod params;
+pub mod portable;
 mod team;
 pub mod topology;
 pub mod update;

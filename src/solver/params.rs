@@ -383,7 +383,7 @@ impl Params {
     /// The damping applied per substep, `k^(1 / substeps)`: `k` is what is
     /// kept of the velocity over a whole `Δt`, whatever the substeps.
     pub fn substep_damping(&self) -> f32 {
-        self.damping.powf(1.0 / self.substeps as f32)
+        super::portable::powf(self.damping, 1.0 / self.substeps as f32)
     }
 
     /// The width `h` of Eq. 3 in force.

@@ -244,5 +244,5 @@ fn rotation_vector(q: glam::Quat) -> Vec3 {
     if s.is_nan() || s <= 1e-9 {
         return v * 2.0;
     }
-    v * (2.0 * s.atan2(q.w) / s)
+    v * (2.0 * super::portable::atan2(s, q.w) / s)
 }

@@ -9,10 +9,10 @@
 //! `scene::load` turns that key into a file, line and column.
 //! [`Preset::warnings`] (in [`warnings`]) flags what is valid but costly.
 
-use glam::{EulerRot, Quat, Vec3};
+use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
-use crate::solver::{ClothSpec, Params};
+use crate::solver::{ClothSpec, Params, portable};
 
 pub mod bodies;
 pub mod expect;
@@ -36,7 +36,7 @@ pub type EulerDegrees = [f32; 3];
 /// Converts XYZ Euler degrees to a quaternion.
 pub fn euler(deg: EulerDegrees) -> Quat {
     let [x, y, z] = deg.map(f32::to_radians);
-    Quat::from_euler(EulerRot::XYZ, x, y, z)
+    portable::euler_xyz(x, y, z)
 }
 
 /// A whole scene.

@@ -72,5 +72,5 @@ pub(crate) fn project<F: Lane, R: Recorder>(
 #[inline]
 pub fn violation(normal: impl Fn(usize) -> Vec3, pair: Pair) -> f32 {
     let (na, nb) = (normal(pair.a as usize), normal(pair.b as usize));
-    na.cross(nb).length().atan2(na.dot(nb))
+    super::atan2(na.cross(nb).length(), na.dot(nb))
 }

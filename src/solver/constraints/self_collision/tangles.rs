@@ -159,7 +159,7 @@ impl SelfContacts {
 /// the particles really near.)
 fn crossing_cell(spec: &ClothSpec) -> f32 {
     let (dx, dy) = spec.spacing();
-    dx.hypot(dy)
+    crate::solver::portable::hypot(dx, dy)
 }
 
 /// Calls `crossing(edge, triangle)` for every (edge, triangle) pair that
