@@ -12,6 +12,47 @@ use crate::record::{Run, table, verdict};
 use crate::scene::{Override, Scene, load, shipped};
 use crate::telemetry::{self, Telemetry, blueprint};
 
+/// Writes a command's output to standard output, like `print!` (and
+/// [`outln!`] like `println!`). A reader that went away
+/// (`weft presets | head`) ends the output, not the command: the rest is
+/// dropped, and the command still finishes its work and exits with its own
+/// code (a `weft compare --fail-if` gate still fails). Any other failure to
+/// write ends the process with `error: …` and code 2.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!($($arg)*))
+    };
+}
+pub(crate) use out;
+
+/// [`out!`] with a newline, like `println!`.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::write_out(format_args!("{}\n", format_args!($($arg)*)))
+    };
+}
+pub(crate) use outln;
+
+/// [`out!`]'s writer.
+pub(crate) fn write_out(args: std::fmt::Arguments) {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    /// Set once the reader has gone away.
+    static GONE: AtomicBool = AtomicBool::new(false);
+    if GONE.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_fmt(args).and_then(|()| stdout.flush()) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => GONE.store(true, Ordering::Relaxed),
+        Err(e) => {
+            eprintln!("error: writing to standard output: {e}");
+            std::process::exit(2);
+        }
+    }
+}
+
 /// weft: oriented-particle cloth simulator and live-telemetry debugger.
 #[derive(Debug, Parser)]
 #[command(name = "weft", version, about, long_about = None)]
@@ -158,7 +199,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Presets => {
             let width = shipped::ALL.iter().map(|p| p.name.len()).max().unwrap_or(0);
             for p in shipped::ALL {
-                println!("{:<width$}  {}", p.name, p.description());
+                outln!("{:<width$}  {}", p.name, p.description());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -169,7 +210,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                     Ok(l) => {
                         warn(&l);
                         let c = &l.preset.cloth;
-                        println!(
+                        outln!(
                             "ok      {p}: {}×{} cloth, {} bodies, {} colliders",
                             c.weft,
                             c.warp,
@@ -179,7 +220,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                     }
                     Err(e) => {
                         failed += 1;
-                        println!("error   {e}");
+                        outln!("error   {e}");
                     }
                 }
             }
@@ -192,7 +233,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Show { preset, set } => {
             let loaded = load::load(&preset, &set)?;
             warn(&loaded);
-            print!("{}", load::to_toml(&loaded.preset));
+            out!("{}", load::to_toml(&loaded.preset));
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
@@ -201,7 +242,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
             if r.truncated {
-                println!(
+                outln!(
                     "{}: the file is cut short; compared what it holds",
                     file.display()
                 );
@@ -210,21 +251,24 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 .recorded_digest
                 .as_deref()
                 .unwrap_or("none (the run did not finish)");
-            println!(
+            outln!(
                 "replayed {} frames with {} parameter changes: final state {}, recorded {}",
-                r.frames, r.changes, r.digest, stored
+                r.frames,
+                r.changes,
+                r.digest,
+                stored
             );
             if let Some(m) = r.positions_match {
-                println!(
+                outln!(
                     "particles at the last logged frame: {}",
                     if m { "identical" } else { "DIFFERENT" }
                 );
             }
             if r.reproduced() {
-                println!("reproduced bit for bit");
+                outln!("reproduced bit for bit");
                 Ok(ExitCode::SUCCESS)
             } else {
-                println!("NOT reproduced");
+                outln!("NOT reproduced");
                 Ok(ExitCode::FAILURE)
             }
         }

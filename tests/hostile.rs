@@ -226,3 +226,40 @@ fn large_grids_are_warned_about_with_an_estimate() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("warning: a 512 × 512 cloth"), "{stderr}");
 }
+
+/// A reader that goes away (`weft presets | head`, `weft show P | less`
+/// quit early) ends the output quietly, not in a panic, and the command's
+/// exit code is still its own: `check` of an invalid preset still exits 1
+/// with nobody reading.
+#[test]
+fn a_reader_that_goes_away_is_not_a_panic() {
+    let closed = || {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        writer
+    };
+    for args in [
+        &["presets"][..],
+        &["show", "flag_on_car"],
+        &["check", "windy_flag"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+            .args(args)
+            .stdout(closed())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?} {stderr}", out.status);
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    let invalid = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(["check", "hanging_sheet", "--set", "cloth.weft=0"])
+        .stdout(closed())
+        .output()
+        .unwrap();
+    assert_eq!(
+        invalid.status.code(),
+        Some(1),
+        "an invalid preset still fails"
+    );
+}

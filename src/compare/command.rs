@@ -1,5 +1,6 @@
 //! `weft compare`: its options and what it prints, writes and exits with.
 
+use crate::cli::{out, outln};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -52,7 +53,7 @@ pub struct CompareArgs {
 pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     let runs = read_all(&args.files).map_err(anyhow::Error::msg)?;
     let text = report::report(&runs);
-    print!("{text}");
+    out!("{text}");
 
     if args.save.is_some() || args.connect.is_some() {
         let rec = recording::open(&runs, args.save.as_deref(), args.connect.as_deref())?;
@@ -69,7 +70,7 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         recording::write(&rec, &runs, placement, &text)?;
         drop(rec);
         if let Some(path) = &args.save {
-            println!(
+            outln!(
                 "\ncomparison written to {} (open it with `rerun {}`)",
                 path.display(),
                 path.display()
@@ -79,9 +80,9 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
 
     let regressions = gate::check(&args.fail_if, &runs);
     if !regressions.is_empty() {
-        print!("\n{}", gate::table(&regressions, &args.fail_if));
+        out!("\n{}", gate::table(&regressions, &args.fail_if));
     } else if !args.fail_if.is_empty() {
-        println!("\nno regression against {} bound(s)", args.fail_if.len());
+        outln!("\nno regression against {} bound(s)", args.fail_if.len());
     }
 
     let mut problems = Vec::new();

@@ -1,5 +1,6 @@
 //! `weft sweep`: its options, the progress bar, Ctrl-C, and `--collect`.
 
+use crate::cli::out;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -221,7 +222,7 @@ fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
     } else {
         Format::Text
     };
-    print!("{}", collect::render(&c.points, format));
+    out!("{}", collect::render(&c.points, format));
     if !c.missing.is_empty() {
         eprintln!(
             "{} of {} points not finished: {}",

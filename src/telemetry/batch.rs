@@ -44,11 +44,13 @@ pub fn points(positions: &[Vec3]) -> rerun::Points3D {
 }
 
 /// Arrows `scale · v` from `origins[k]` for the vectors `v = vectors[k]`
-/// that `keep`, nothing else set, in one pass over both.
+/// that `keep`, each at most `longest` long (a longer one keeps its
+/// direction), nothing else set, in one pass over both.
 pub fn arrows(
     origins: &[Vec3],
     vectors: &[Vec3],
     scale: f32,
+    longest: f32,
     keep: impl Fn(Vec3) -> bool,
 ) -> rerun::Arrows3D {
     let n = 3 * origins.len().min(vectors.len());
@@ -56,7 +58,14 @@ pub fn arrows(
     for (o, v) in origins.iter().zip(vectors) {
         if keep(*v) {
             from.extend_from_slice(&o.to_array());
-            along.extend_from_slice(&(*v * scale).to_array());
+            let arrow = *v * scale;
+            let length = arrow.length();
+            let arrow = if length > longest {
+                arrow * (longest / length)
+            } else {
+                arrow
+            };
+            along.extend_from_slice(&arrow.to_array());
         }
     }
     let mut arrows = rerun::Arrows3D::update_fields();
@@ -99,15 +108,20 @@ mod tests {
         let (o, v) = ([Vec3::X, Vec3::Y], [Vec3::Z, -Vec3::Z]);
         assert_eq!(points(&o), rerun::Points3D::new(o));
         assert_eq!(
-            arrows(&o, &v, 1.0, |_| true),
+            arrows(&o, &v, 1.0, f32::INFINITY, |_| true),
             rerun::Arrows3D::from_vectors(v).with_origins(o)
         );
         assert_eq!(
-            arrows(&o, &v, 2.0, |v| v.z > 0.0),
+            arrows(&o, &v, 2.0, f32::INFINITY, |v| v.z > 0.0),
             rerun::Arrows3D::from_vectors([2.0 * Vec3::Z]).with_origins([Vec3::X])
         );
+        // Longer than `longest`: shortened to it, the direction kept.
         assert_eq!(
-            arrows(&o, &v, 2.0, |_| false),
+            arrows(&o, &v, 2.0, 1.5, |_| true),
+            rerun::Arrows3D::from_vectors([1.5 * Vec3::Z, -1.5 * Vec3::Z]).with_origins(o)
+        );
+        assert_eq!(
+            arrows(&o, &v, 2.0, f32::INFINITY, |_| false),
             rerun::Arrows3D::from_vectors(Vec::<Vec3>::new()).with_origins(Vec::<Vec3>::new())
         );
         assert_eq!(

@@ -35,12 +35,13 @@ impl Telemetry {
             .log(paths::MESH, &batch::mesh_update(x, &normals))?;
         self.rec.log(
             paths::NORMALS,
-            &batch::arrows(x, &normals, 2.0 * radius, |_| true)
+            &batch::arrows(x, &normals, 2.0 * radius, f32::INFINITY, |_| true)
                 .with_colors([rerun::Color::from_rgb(90, 160, 255)]),
         )?;
         self.drawn.surface = true;
         if let Some(d) = solver.diagnostics() {
-            self.log_corrections(x, d)?;
+            let spec = solver.spec();
+            self.log_corrections(x, d, spec.width.max(spec.height))?;
         }
         if self.particle_values {
             self.log_particle_values(scene)?;
@@ -70,10 +71,18 @@ impl Telemetry {
     }
 
     /// Each family's δx and δθ arrows of at least the threshold's length,
-    /// none for a family switched off. A family with none to draw logs
-    /// nothing, unless it drew some at the last frame: then its empty
-    /// batch clears them.
-    fn log_corrections(&mut self, x: &[Vec3], d: &Diagnostics) -> RecordingStreamResult<()> {
+    /// none for a family switched off, each drawn at most `longest` long
+    /// (the cloth's longer side): an element turned over turns by up to π in
+    /// one sweep, whose arrow at the default scale would be tens of metres
+    /// long and pull the viewer's camera, which frames whatever is drawn,
+    /// away from the cloth. A family with none to draw logs nothing, unless
+    /// it drew some at the last frame: then its empty batch clears them.
+    fn log_corrections(
+        &mut self,
+        x: &[Vec3],
+        d: &Diagnostics,
+        longest: f32,
+    ) -> RecordingStreamResult<()> {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
@@ -82,7 +91,7 @@ impl Telemetry {
                 .into_iter()
                 .enumerate()
             {
-                let arrows = batch::arrows(x, vectors, scale, |v| {
+                let arrows = batch::arrows(x, vectors, scale, longest, |v| {
                     shown && {
                         let len = v.length();
                         len >= threshold && len > 0.0
@@ -107,7 +116,7 @@ impl Telemetry {
     pub(super) fn blank_full(&mut self) -> RecordingStreamResult<()> {
         let rec = &self.rec;
         let drawn = std::mem::take(&mut self.drawn);
-        let no_arrows = || batch::arrows(&[], &[], 1.0, |_| true);
+        let no_arrows = || batch::arrows(&[], &[], 1.0, f32::INFINITY, |_| true);
         if drawn.surface {
             rec.log(paths::MESH, &batch::mesh_update(&[], &[]))?;
             rec.log(paths::NORMALS, &no_arrows())?;
