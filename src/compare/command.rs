@@ -1,6 +1,5 @@
 //! `weft compare`: its options and what it prints, writes and exits with.
 
-use crate::cli::{out, outln};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -10,6 +9,7 @@ use glam::Vec3;
 use super::gate::{self, Bound};
 use super::recording::{self, Placement};
 use super::{RunData, incomparable, read_all, report};
+use crate::cli::{out, outln};
 
 /// Options of `weft compare`.
 #[derive(Debug, Args)]

@@ -1,6 +1,5 @@
 //! `weft sweep`: its options, the progress bar, Ctrl-C, and `--collect`.
 
-use crate::cli::out;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -13,6 +12,7 @@ use super::collect::{self, Format};
 use super::grid::Axis;
 use super::shard::{self, Shard};
 use super::{MAX_POINTS, MAX_SECONDS, Plan, Progress};
+use crate::cli::out;
 use crate::compare::{read_all, recording, report};
 
 /// Options of `weft sweep`.
