@@ -8,7 +8,7 @@
 //! 1. **update** ([`update`]): every particle moves on its own by Störmer
 //!    integration with damping `k`, under gravity and wind on its face;
 //!    driven particles follow their attachment exactly.
-//! 2. **adjust** ([`constraints`]): `iterations` sweeps over four families of
+//! 2. **adjust** ([`constraints`]): `iterations` sweeps over five families of
 //!    geometric constraints between neighbours, each weighted by its `λ`:
 //!    planarity, normality (with shear), curvature, facing (weft's own: each
 //!    element turns to face the way the surface its neighbours make does,

@@ -59,9 +59,9 @@ pub fn arrows(
         if keep(*v) {
             from.extend_from_slice(&o.to_array());
             let arrow = *v * scale;
-            let length = arrow.length();
-            let arrow = if length > longest {
-                arrow * (longest / length)
+            // Compared squared: no square root for the arrows that fit.
+            let arrow = if arrow.length_squared() > longest * longest {
+                arrow * (longest / arrow.length())
             } else {
                 arrow
             };

@@ -12,8 +12,8 @@
 //! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `normal_offset`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` (families that turn), as `f32` | full, with `set_particle_values` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface (`full.rs`, with the normals, the corrections and the hover values) | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
-//! | `world/corrections/{family}/dx` | δx of the last adjust (arrows) | full |
-//! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, at most the cloth's longer side long, as δx's), families that turn | full |
+//! | `world/corrections/{family}/dx` | δx of the last adjust (arrows, each at most the cloth's longer side long) | full |
+//! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, as δx's), families that turn | full |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
 //! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth (`colliders.rs`) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
