@@ -24,7 +24,7 @@ use super::{
     constraints::lanes::{Lane, V3, WIDE_LANES},
     constraints::{Particles, Recorder, Shared, atan2, facing},
     family::{Family, PerFamily},
-    team::Crew,
+    team::{self, Crew},
     topology::{Pair, Patch, Topology},
 };
 
@@ -125,6 +125,8 @@ pub struct Diagnostics {
     pub max_strain: f32,
     /// Kinetic energy of the free particles, in joules.
     pub kinetic_energy: f32,
+    /// How well the elements' normals follow the surface after the step.
+    pub orientation: Orientation,
     /// Edges of the cloth's mesh that cross a triangle (see
     /// [`Solver::self_crossings`](super::Solver::self_crossings)), while
     /// self-collision is on.
@@ -411,9 +413,15 @@ fn edge_strains<'a>(
 /// weight. Planarity cannot tell `n` from `−n`, so an angle above 90° is an
 /// element facing the other way. 0 where `g` vanishes (a particle whose
 /// neighbours coincide).
-pub fn normal_offsets(state: &ClothState, topology: &Topology) -> Vec<f32> {
-    let patches = topology.patches.items.iter();
-    patches.map(|&p| normal_offset(state, p)).collect()
+/// Measured on up to `threads` threads.
+pub fn normal_offsets(state: &ClothState, topology: &Topology, threads: usize) -> Vec<f32> {
+    const BLOCK: usize = 1024;
+    let patches = &topology.patches.items;
+    team::run_blocks(threads, patches.len(), BLOCK, |r| {
+        let offsets = patches[r].iter().map(|&p| normal_offset(state, p));
+        offsets.collect::<Vec<_>>()
+    })
+    .concat()
 }
 
 /// The entry of [`normal_offsets`] for `patch`'s particle (for inspecting

@@ -592,42 +592,34 @@ pub fn violation(
 }
 
 /// Every family's violation, as [`violation`] measures each, on up to
-/// `threads` threads, for the families `measured` names (0 for the others).
-/// The structural pairs are measured once for the three families that share
-/// them, and every set in blocks whose tallies merge in block order, so the
-/// figures do not depend on the threads.
+/// `threads` threads, for the families `measured` names (0 for the others);
+/// facing's is tallied from `offsets`, each element's angle to its surface
+/// ([`normal_offsets`](super::diagnostics::normal_offsets), its measure),
+/// and is 0 without them. The structural pairs are measured once for the
+/// three families that share them, and every set in blocks whose tallies
+/// merge in block order, so the figures do not depend on the threads.
 pub fn violations(
     state: &ClothState,
     topology: &Topology,
     spec: &ClothSpec,
     threads: usize,
     measured: impl Fn(Family) -> bool,
+    offsets: Option<&[f32]>,
 ) -> PerFamily<Violation> {
-    const BLOCK: usize = 1024;
     let x = &state.position;
     let normal = |i| state.normal(i);
-    let pairs = &topology.structural.items;
-    let bends = &topology.bend.items;
-    let mut of_pairs = [Tally::default(); 3];
-    for block in team::run_blocks(threads, pairs.len(), BLOCK, |r| {
-        let mut t = [Tally::default(); 3];
-        for &p in &pairs[r] {
-            t[0].add(stretch::violation(x, p));
-            t[1].add(planarity::violation(x, normal, p));
-            t[2].add(normality::violation(normal, p));
-        }
-        t
-    }) {
-        for (all, t) in of_pairs.iter_mut().zip(block) {
-            all.merge(t);
-        }
-    }
-    let of_bends = tally(threads, bends, |b| curvature::violation(x, b));
-    let of_patches = measured(Family::Facing).then(|| {
-        tally(threads, &topology.patches.items, |p| {
-            facing::violation(x, normal, p)
-        })
+    let of_pairs = tallies(threads, &topology.structural.items, |p| {
+        [
+            stretch::violation(x, p),
+            planarity::violation(x, normal, p),
+            normality::violation(normal, p),
+        ]
     });
+    let [of_bends] = tallies(threads, &topology.bend.items, |b| {
+        [curvature::violation(x, b)]
+    });
+    // Already measured: tallied on this thread.
+    let of_patches = offsets.map(|o| tallies(1, o, |a| [a])[0]);
     PerFamily::from_fn(|family| match family {
         _ if !measured(family) => Violation::default(),
         Family::Stretch => of_pairs[0].violation(),
@@ -639,17 +631,27 @@ pub fn violations(
     })
 }
 
-/// One violation of each item, tallied in blocks on up to `threads`
+/// `N` violations of each item, each tallied in blocks on up to `threads`
 /// threads and merged in block order.
-fn tally<T: Copy + Sync>(threads: usize, items: &[T], f: impl Fn(T) -> f32 + Sync) -> Tally {
+fn tallies<T: Copy + Sync, const N: usize>(
+    threads: usize,
+    items: &[T],
+    f: impl Fn(T) -> [f32; N] + Sync,
+) -> [Tally; N] {
     const BLOCK: usize = 1024;
-    let mut all = Tally::default();
-    for t in team::run_blocks(threads, items.len(), BLOCK, |r| {
-        let mut t = Tally::default();
-        items[r].iter().for_each(|&c| t.add(f(c)));
+    let mut all = [Tally::default(); N];
+    for block in team::run_blocks(threads, items.len(), BLOCK, |r| {
+        let mut t = [Tally::default(); N];
+        for &item in &items[r] {
+            for (t, v) in t.iter_mut().zip(f(item)) {
+                t.add(v);
+            }
+        }
         t
     }) {
-        all.merge(t);
+        for (all, t) in all.iter_mut().zip(block) {
+            all.merge(t);
+        }
     }
     all
 }

@@ -430,12 +430,20 @@ impl Solver {
     /// is on ([`Family::measured_only_while_on`]; off, they report 0).
     /// Measured on the solver's threads.
     pub fn measured_violations(&self) -> PerFamily<Violation> {
+        let offsets = self.measured(Family::Facing).then(|| self.normal_offsets());
+        self.violations_from(offsets.as_deref())
+    }
+
+    /// [`Solver::measured_violations`], facing's from `offsets` (each
+    /// element's [`Solver::normal_offsets`], given while facing is on).
+    fn violations_from(&self, offsets: Option<&[f32]>) -> PerFamily<Violation> {
         family::violations(
             &self.state,
             &self.topology,
             &self.spec,
             self.threads(),
             |f| self.measured(f),
+            offsets,
         )
     }
 
@@ -473,7 +481,7 @@ impl Solver {
     /// Per element, the angle between its normal and the surface's
     /// ([`diagnostics::normal_offsets`]; above 90°: facing the other way).
     pub fn normal_offsets(&self) -> Vec<f32> {
-        diagnostics::normal_offsets(&self.state, &self.topology)
+        diagnostics::normal_offsets(&self.state, &self.topology, self.threads())
     }
 
     /// Particle `i`'s entry of [`Solver::normal_offsets`], on its own.
@@ -572,8 +580,13 @@ impl Solver {
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
-            let violations = self.measured_violations();
+            // The normals against the surface, for facing's violation and
+            // the orientation: measured once.
+            let offsets = self.normal_offsets();
+            let facing = self.measured(Family::Facing).then_some(&offsets[..]);
+            let violations = self.violations_from(facing);
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
+            d.orientation = diagnostics::orientation(&offsets);
             d.self_crossings = crossings;
             for (fd, v) in d.families.iter_mut().zip(violations) {
                 fd.violation = v;

@@ -380,7 +380,7 @@ impl Telemetry {
                 rec.log(paths::SELF_CROSSINGS, &rerun::Scalars::single(n as f64))?;
             }
             rec.log(paths::STRAIN, &rerun::Scalars::single(d.max_strain as f64))?;
-            let o = solver.orientation();
+            let o = d.orientation;
             rec.log(
                 paths::NORMALS_FLIPPED,
                 &rerun::Scalars::single(o.flipped as f64),

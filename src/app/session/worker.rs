@@ -353,7 +353,7 @@ impl Worker {
                     for f in Family::ALL {
                         values[2 + f.index()] = d.family(f).violation.max;
                     }
-                    values[2 + Family::COUNT] = run.scene.solver().orientation().flipped;
+                    values[2 + Family::COUNT] = d.orientation.flipped;
                     self.series.push((frame, run.scene.time(), values));
                 }
             }
