@@ -37,8 +37,8 @@ impl Replayed {
 
 /// Parameters as a recording stores them. A recording stores every
 /// family's weight; one made before a family existed has none for it, and
-/// ran without it, so that family's weight is 0, not today's default
-/// (facing, added on 2026-11-26 with a default of 0.99).
+/// ran without it, so that family's weight is 0, not its default (0.99 for
+/// facing).
 pub(crate) fn stored_tuning(text: &str) -> Result<Tuning, toml::de::Error> {
     let table: toml::Table = toml::from_str(text)?;
     let weights = table

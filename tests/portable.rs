@@ -4,7 +4,7 @@
 //! (`tests/other-libm.c`), so a recording replays on a machine with another
 //! C library. A step that called the platform's `sinf`, `atan2f` or `powf`
 //! would fail here: weft before `solver::portable` moved every preset's
-//! final state under it (BENCHMARKS.md, "The same bits on another machine").
+//! final state under it (docs/method.md, "The same bits on another machine").
 
 #![cfg(target_os = "linux")]
 

@@ -113,8 +113,9 @@ const SUSPENSION_DAMPING: f32 = 0.4;
 /// 20 s later the car's pitch and roll reach 1e-21 rad, their products in
 /// every collider transform and attachment fall below `f32`'s normal range,
 /// and subnormal arithmetic made a step of `flag_on_car` twice as slow
-/// (BENCHMARKS.md). A femtometre is far below anything visible, and is
-/// reached only after the shipped 16 s, so the shipped run is unchanged.
+/// (BENCHMARKS.md, "Measured design choices"). A femtometre is far below
+/// anything visible, and is reached only after the shipped 16 s, so the
+/// shipped run is unchanged.
 const SETTLED: f32 = 1e-15;
 
 /// A path integrated from speed and heading.

@@ -853,7 +853,7 @@ impl Solver {
 /// threads measured from 8 % faster to several times slower from run to run
 /// on a 2-core virtual machine: with a barrier every few microseconds, a
 /// thread the host pauses stalls its partner. From 64 × 64 up the gain held
-/// in every run (BENCHMARKS.md).
+/// in every run (BENCHMARKS.md, "Measured design choices").
 const PARALLEL_MIN_PARTICLES: usize = 2048;
 
 /// How much farther than the thickness, in rest spacings, a particle and a

@@ -65,7 +65,8 @@ impl Default for Environment {
 /// takes them from the speeds, not from the lengths of the acceleration
 /// vectors. Squaring those vectors' components, which for a slowly moving
 /// element are tiny, made subnormal numbers, and a settled sheet in still
-/// air spent half its update phase in their slow arithmetic (BENCHMARKS.md).
+/// air spent half its update phase in their slow arithmetic (BENCHMARKS.md,
+/// "Measured design choices").
 #[inline]
 pub fn wind_acceleration(env: &Environment, areal_density: f32, n: Vec3, v: Vec3, dt: f32) -> Vec3 {
     let u = env.wind - v;

@@ -54,7 +54,7 @@ use crate::solver::{Family, Pose, Solver, StepError};
 /// A full frame of a 64 × 64 sheet is about 930 kB, so with Rerun's default
 /// of 2 MiB each entity's chunk held two frames, and encoding, compressing
 /// and indexing that many small chunks took about 12 % of a full step
-/// (BENCHMARKS.md, "Full telemetry in bigger chunks"). Live streams keep
+/// (BENCHMARKS.md, "Measured design choices"). Live streams keep
 /// Rerun's low-latency batching. The `RERUN_FLUSH_*` environment variables
 /// still apply on top.
 pub fn file_batching() -> Result<rerun::log::ChunkBatcherConfig, rerun::log::ChunkBatcherError> {

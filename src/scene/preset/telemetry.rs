@@ -99,7 +99,7 @@ impl ColorBy {
     }
 }
 
-/// Telemetry settings (see the README's telemetry section).
+/// Telemetry settings (see docs/telemetry.md).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TelemetrySettings {

@@ -374,7 +374,7 @@ const SOLO_BATCH: usize = 256;
 /// [`WIDE_LANES`] in the AVX2 copy (a long batch's share; its remainder in
 /// chunks of [`LANES`]). Sixteen lanes are 5–10 % faster steps on the big
 /// sheets and slower on a small cloth, whose batches are short
-/// (BENCHMARKS.md, "Sixteen lanes in two AVX registers").
+/// (BENCHMARKS.md, "Measured design choices").
 #[derive(Clone, Copy, PartialEq)]
 enum Width {
     Narrow,
@@ -395,7 +395,7 @@ fn claim_block(len: usize, size: usize) -> usize {
 
 /// The largest block [`claim_block`] hands out: 3 % faster steps at
 /// 256 × 256 than blocks of a quarter of a thread's share, the same at
-/// 64 × 64 and 128 × 128 (BENCHMARKS.md, the Intel machine of 2026-11-25).
+/// 64 × 64 and 128 × 128 (BENCHMARKS.md, "Measured design choices").
 const MAX_BLOCK: usize = 512;
 
 /// Projects `items[range]` chunk by chunk ([`project_batches`]), in AVX

@@ -17,9 +17,9 @@
 //! [`Avx16`] (sixteen in two, for the batches long enough to be shared
 //! between threads). The same bits in all three; against `Sse`, 2–4 %
 //! faster steps for eight AVX lanes and another 5–10 % for sixteen on the
-//! benchmark sheets (BENCHMARKS.md, "the kernels in AVX registers",
-//! "Sixteen lanes in two AVX registers"). A small cloth's short batches keep
-//! eight: two registers a value spill more, and its particles stay in cache.
+//! benchmark sheets (BENCHMARKS.md, "Measured design choices"). A small
+//! cloth's short batches keep eight: two registers a value spill more, and
+//! its particles stay in cache.
 //!
 //! **Same result as one at a time.** Every lane runs exactly the operations,
 //! in exactly the order, of the scalar formula it stands for (IEEE addition,

@@ -22,7 +22,7 @@ type V3 = crate::solver::constraints::lanes::V3<F>;
 /// extended planes can put the particle on the wrong side), cost a third
 /// more of the step, and let `folding_sheet` at 32 × 32 and
 /// `furling_banner` at 48 × 36 cross where a twentieth does not
-/// (BENCHMARKS.md).
+/// (BENCHMARKS.md, "Measured design choices").
 const CANDIDATE: f32 = 0.05;
 
 /// The contact search's test for one triangle, on [`LANES`] particles at a
