@@ -269,6 +269,12 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 Ok(ExitCode::SUCCESS)
             } else {
                 outln!("NOT reproduced");
+                if r.before_floating_origin {
+                    outln!(
+                        "{} was made by a weft from before the floating origin, which simulated in world coordinates with other rounding; this weft cannot reproduce it bit for bit (record it again to replay it)",
+                        file.display()
+                    );
+                }
                 Ok(ExitCode::FAILURE)
             }
         }

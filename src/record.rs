@@ -42,6 +42,13 @@ pub struct Figures {
     pub failure: Option<String>,
     /// Digest of the final state (see `ClothState::digest`), in hex.
     pub final_state: String,
+    /// The most edges of the cloth crossing one of its triangles at any
+    /// measured frame (the cloth passing through itself; measured at every
+    /// frame with diagnostics, whatever self-collision's weight).
+    pub max_crossings: u64,
+    /// The solver's floating origin at the last frame, in world
+    /// coordinates (none in a recording made before weft had one).
+    pub final_origin: Option<[f64; 3]>,
 }
 
 /// One `[expect]` bound checked against the figures.
@@ -86,6 +93,14 @@ pub fn verdict(expect: Option<&Expect>, figures: &Figures) -> Vec<Check> {
             limit,
             figures.final_kinetic_energy,
         );
+    }
+    if let Some(limit) = expect.max_crossings {
+        checks.push(Check {
+            bound: "expect.max_crossings".into(),
+            limit,
+            value: figures.max_crossings as f64,
+            ok: figures.max_crossings as f64 <= limit,
+        });
     }
     if expect.finite {
         checks.push(Check {
@@ -207,6 +222,13 @@ impl Run {
 
     fn measure(&mut self) {
         measure(&mut self.figures, self.scene.solver());
+        // Without diagnostics, crossings are counted only for a bound.
+        let bounded =
+            (self.scene.preset().expect.as_ref()).is_some_and(|e| e.max_crossings.is_some());
+        if self.scene.solver().diagnostics().is_none() && bounded {
+            let n = self.scene.solver().self_crossings() as u64;
+            self.figures.max_crossings = self.figures.max_crossings.max(n);
+        }
     }
 
     /// A copy of the run's state (scene and figures), to resume from later.
@@ -267,6 +289,7 @@ impl Run {
         };
         f.final_kinetic_energy = solver.kinetic_energy();
         f.final_state = format!("{:016x}", solver.state().digest());
+        f.final_origin = Some(solver.frame().origin.to_array());
         f
     }
 
@@ -317,6 +340,9 @@ fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
         ),
     };
     f.max_strain = f.max_strain.max(strain);
+    if let Some(n) = solver.diagnostics().and_then(|d| d.self_crossings) {
+        f.max_crossings = f.max_crossings.max(n as u64);
+    }
     for (fam, &v) in violations.iter() {
         let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
         *slot = slot.max(v);

@@ -23,6 +23,11 @@ pub struct Replayed {
     pub changes: usize,
     /// Whether the file was cut short (what it holds was still compared).
     pub truncated: bool,
+    /// Whether the recording was made by a weft from before the floating
+    /// origin (its summary names no `final_origin`): that weft computed in
+    /// world coordinates, with other rounding, so this one cannot
+    /// reproduce it bit for bit.
+    pub before_floating_origin: bool,
 }
 
 impl Replayed {
@@ -75,6 +80,9 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
     let recorded_digest = summary
         .as_ref()
         .and_then(|s| Some(s.get("final_state")?.as_str()?.to_string()));
+    let before_floating_origin = summary
+        .as_ref()
+        .is_some_and(|s| !s.contains_key("final_origin"));
     let last_logged = rec.last_positions.as_ref().map(|(f, _)| *f as u64);
     let frames = recorded_frames.or(last_logged).unwrap_or(0);
 
@@ -103,7 +111,7 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
         if let Some((f, recorded)) = &rec.last_positions
             && *f as u64 == frame
         {
-            let x = &scene.solver().state().position;
+            let x = &*scene.world_positions();
             positions_match = Some(
                 x.len() == recorded.len()
                     && x.iter()
@@ -119,6 +127,7 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
         positions_match,
         changes: changes.len().saturating_sub(1),
         truncated: rec.truncated,
+        before_floating_origin,
     })
 }
 

@@ -42,7 +42,7 @@ fn car_flag_swings_forward_when_the_car_brakes() {
     // The flag's centre along the car's forward axis, relative to the pole.
     let ahead = |scene: &Scene| {
         let car = scene.body_poses()[0];
-        let x = &scene.solver().state().position;
+        let x = &*scene.world_positions();
         let centre = x.iter().copied().sum::<Vec3>() / x.len() as f32;
         let pole = car.transform_point(Vec3::new(-1.6, 0.55, 1.65));
         (car.rotation * Vec3::X).dot(centre - pole)
@@ -84,7 +84,7 @@ fn drape_settles_on_the_sphere_and_never_goes_through() {
         .unwrap();
     for _ in 0..scene.frames_in(preset.duration) {
         scene.step().unwrap();
-        for x in &scene.solver().state().position {
+        for x in scene.world_positions().iter() {
             assert!(
                 x.distance(sphere.0) >= sphere.1 + margin - 1e-3,
                 "inside the sphere: {x}"
@@ -92,7 +92,7 @@ fn drape_settles_on_the_sphere_and_never_goes_through() {
             assert!(x.z >= margin - 1e-3, "below the ground: {x}");
         }
     }
-    let x = &scene.solver().state().position;
+    let x = &*scene.world_positions();
     let on_top = x
         .iter()
         .filter(|p| p.z > sphere.0.z + sphere.1 * 0.9)

@@ -368,6 +368,7 @@ impl Panel {
                 for (f, v) in status.max_violation.iter() {
                     row(ui, &format!("max {}", f.name()), format!("{v:.4}"));
                 }
+                row(ui, "crossing edges", status.crossings.to_string());
                 row(
                     ui,
                     "checkpoints",

@@ -227,6 +227,8 @@ fn rebuild_figures(rec: &read::Recording) -> Figures {
         interrupted: true,
         failure,
         final_state: String::new(),
+        max_crossings: max_of(paths::SELF_CROSSINGS) as u64,
+        final_origin: None,
     }
 }
 

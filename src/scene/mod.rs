@@ -5,6 +5,16 @@
 //! frame and advances the solver by one `Δt`. Everything is deterministic:
 //! the same preset gives the same frames.
 //!
+//! Presets, bodies and colliders are in world coordinates; the solver
+//! measures every position from a floating origin kept in double precision
+//! ([`crate::solver::frame`]). The scene puts the origin on the **carrier**,
+//! the body most of the cloth's attachments follow, and moves it with the
+//! carrier's position at every step (a cloth that hangs from nothing keeps
+//! it where the cloth was placed). So the cloth moves the same wherever it
+//! is and however fast it is carried, and it starts moving with its
+//! carrier. [`Scene::world_positions`] gives the particles in world
+//! coordinates.
+//!
 //! ```
 //! use weft::scene::{Scene, load};
 //!
@@ -22,16 +32,19 @@ pub mod preset;
 pub mod shipped;
 pub mod tuning;
 
-use glam::Vec3;
+use std::borrow::Cow;
+
+use glam::{DVec3, Vec3};
 
 pub use load::{Loaded, Override, PresetError};
 pub use preset::Preset;
 pub use tuning::Tuning;
 
 use crate::solver::{
-    Collider, Environment, ParamError, Params, Pose, SetupError, Shape, Solver, StepError,
+    Collider, Environment, Frame, ParamError, Params, Pose, SetupError, Shape, Solver, StepError,
 };
 use motion::Motion;
+pub use motion::Placement;
 use preset::{ShapeKind, WindSection, euler};
 
 /// A running scene.
@@ -40,7 +53,14 @@ pub struct Scene {
     preset: Preset,
     solver: Solver,
     motions: Vec<Motion>,
+    /// The bodies where they are, in world coordinates.
+    placements: Vec<Placement>,
+    /// The same, in single precision (for drawing).
+    world_poses: Vec<Pose>,
+    /// The same, measured from the solver's origin.
     poses: Vec<Pose>,
+    /// The body the origin moves with, if any.
+    carrier: Option<usize>,
     frame: u64,
 }
 
@@ -48,10 +68,17 @@ impl Scene {
     /// Builds the scene a (validated) preset describes, at time 0.
     pub fn new(preset: &Preset) -> Result<Self, SetupError> {
         let mut motions: Vec<Motion> = preset.bodies.iter().map(Motion::new).collect();
-        let poses: Vec<Pose> = motions.iter_mut().map(|m| m.pose(0.0)).collect();
-        let spec = preset.cloth.spec();
-        let mut solver = Solver::new(spec, preset.solver, &poses)?;
+        let placements: Vec<Placement> = motions.iter_mut().map(|m| m.pose(0.0)).collect();
         let body = |name: &str| preset.bodies.iter().position(|b| b.name == name);
+        let carrier = carrier(preset, &body);
+        let origin = carrier.map_or(preset.cloth.position, |b| placements[b].translation);
+        let poses: Vec<Pose> = placements.iter().map(|p| p.from(origin)).collect();
+        let spec = preset.cloth.spec_from(origin);
+        let mut solver = Solver::new(spec, preset.solver, &poses)?;
+        solver.set_frame(Frame {
+            origin,
+            shift: DVec3::ZERO,
+        });
         for (a, att) in preset.attachments.iter().enumerate() {
             let b = body(&att.body).ok_or_else(|| SetupError::NoSuchBody {
                 what: format!("attachment {a} (`{}`)", att.body),
@@ -109,7 +136,10 @@ impl Scene {
             preset: preset.clone(),
             solver,
             motions,
+            world_poses: placements.iter().map(Placement::world).collect(),
+            placements,
             poses,
+            carrier,
             frame: 0,
         })
     }
@@ -125,15 +155,47 @@ impl Scene {
         &mut self,
         after_substep: &mut dyn FnMut(&crate::solver::ClothState),
     ) -> Result<(), StepError> {
-        let t0 = self.solver.time() as f32;
-        let t1 = t0 + self.solver.params().dt;
-        for (pose, m) in self.poses.iter_mut().zip(&mut self.motions) {
-            *pose = m.pose(t1);
+        let t0 = self.solver.time();
+        let t1 = t0 + self.solver.params().dt as f64;
+        for (placement, m) in self.placements.iter_mut().zip(&mut self.motions) {
+            *placement = m.pose(t1);
         }
-        let env = self.environment_at(t0);
-        self.solver.step_with(&env, &self.poses, after_substep)?;
+        let origin = self.carrier.map_or(self.solver.frame().origin, |b| {
+            self.placements[b].translation
+        });
+        for (pose, placement) in self.poses.iter_mut().zip(&self.placements) {
+            *pose = placement.from(origin);
+        }
+        let env = self.environment_at(t0 as f32);
+        self.solver
+            .step_in_frame(&env, &self.poses, origin, after_substep)?;
+        for (world, placement) in self.world_poses.iter_mut().zip(&self.placements) {
+            *world = placement.world();
+        }
         self.frame += 1;
         Ok(())
+    }
+
+    /// The particles' positions in world coordinates (the solver measures
+    /// them from its floating origin).
+    pub fn world_positions(&self) -> Cow<'_, [Vec3]> {
+        let x = &self.solver.state().position;
+        if self.solver.frame().origin == DVec3::ZERO {
+            return Cow::Borrowed(x);
+        }
+        Cow::Owned(self.to_world(x))
+    }
+
+    /// Points measured from the solver's origin, in world coordinates.
+    pub fn to_world(&self, local: &[Vec3]) -> Vec<Vec3> {
+        let frame = self.solver.frame();
+        local.iter().map(|&p| frame.world(p).as_vec3()).collect()
+    }
+
+    /// The body the origin moves with, if any (the one most of the cloth's
+    /// attachments follow).
+    pub fn carrier(&self) -> Option<usize> {
+        self.carrier
     }
 
     /// Gravity, air and the gusting wind at time `t`.
@@ -200,15 +262,39 @@ impl Scene {
         self.preset.bodies.iter().map(|b| b.name.as_str())
     }
 
-    /// Body poses at the current time.
+    /// Body poses at the current time, in world coordinates.
     pub fn body_poses(&self) -> &[Pose] {
-        self.solver.bodies()
+        &self.world_poses
+    }
+
+    /// Body poses at the current time, in world coordinates, positions in
+    /// double precision.
+    pub fn body_placements(&self) -> &[Placement] {
+        &self.placements
     }
 
     /// Frames in `seconds` of simulated time (at least one).
     pub fn frames_in(&self, seconds: f32) -> u64 {
         ((seconds / self.solver.params().dt).round() as u64).max(1)
     }
+}
+
+/// The body most of the preset's attached particles follow (the first of
+/// those with most), if any particle is attached.
+fn carrier(preset: &Preset, body: &impl Fn(&str) -> Option<usize>) -> Option<usize> {
+    let spec = preset.cloth.spec();
+    let mut count = vec![0usize; preset.bodies.len()];
+    for att in &preset.attachments {
+        if let Some(b) = body(&att.body) {
+            let cells = att
+                .select
+                .iter()
+                .map(|r| r.cells(spec.weft, spec.warp).len());
+            count[b] += cells.sum::<usize>() + att.particles.len();
+        }
+    }
+    let most = count.iter().copied().max().filter(|&m| m > 0)?;
+    count.iter().position(|&c| c == most)
 }
 
 /// The wind at time `t`: the mean velocity, plus gusts along it and a sway of

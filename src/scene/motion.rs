@@ -10,8 +10,13 @@
 //! Car and runner paths are integrated once, at a fixed rate, into a table
 //! that grows as time advances, so any time is evaluated deterministically.
 //! The world is Z-up; a body's local +X is forward, +Y left.
+//!
+//! Positions are in double precision ([`Placement`]), and a path is
+//! integrated from its start (at zero) and placed there last: so a body's
+//! motion, measured from the solver's floating origin, has the same bits
+//! wherever in the world it runs ([`crate::solver::frame`]).
 
-use glam::Vec3;
+use glam::{DVec3, Quat};
 
 use super::preset::{BodySection, CarMotion, Interpolation, KeyframeMotion, RunnerMotion, euler};
 use crate::solver::Pose;
@@ -20,11 +25,33 @@ use crate::solver::portable::{atan2, cos, rotation_x, rotation_y, rotation_z, si
 /// Rate at which car and runner paths are integrated, in samples per second.
 const PATH_RATE: f32 = 960.0;
 
+/// A body's pose in world coordinates, its position in double precision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    /// Position, in metres.
+    pub translation: DVec3,
+    /// Orientation.
+    pub rotation: Quat,
+}
+
+impl Placement {
+    /// The pose measured from `origin` (world coordinates), as the solver
+    /// takes it.
+    pub fn from(&self, origin: DVec3) -> Pose {
+        Pose::new((self.translation - origin).as_vec3(), self.rotation)
+    }
+
+    /// The pose in world coordinates, in single precision (for drawing).
+    pub fn world(&self) -> Pose {
+        Pose::new(self.translation.as_vec3(), self.rotation)
+    }
+}
+
 /// A body's motion, ready to evaluate.
 #[derive(Clone, Debug)]
 pub enum Motion {
     /// Never moves.
-    Static(Pose),
+    Static(Placement),
     /// Keyframes.
     Keyframes(KeyframeMotion),
     /// A car or a runner.
@@ -35,7 +62,10 @@ impl Motion {
     /// The motion a body section describes (validated).
     pub fn new(body: &BodySection) -> Self {
         if let Some(m) = &body.fixed {
-            Motion::Static(Pose::new(m.position, euler(m.rotation)))
+            Motion::Static(Placement {
+                translation: m.position,
+                rotation: euler(m.rotation),
+            })
         } else if let Some(m) = &body.keyframes {
             Motion::Keyframes(m.clone())
         } else if let Some(m) = &body.car {
@@ -43,25 +73,31 @@ impl Motion {
         } else if let Some(m) = &body.runner {
             Motion::Path(Path::new(Driver::Runner(m.clone())))
         } else {
-            Motion::Static(Pose::IDENTITY)
+            Motion::Static(Placement {
+                translation: DVec3::ZERO,
+                rotation: Quat::IDENTITY,
+            })
         }
     }
 
     /// The pose at time `t ≥ 0`.
-    pub fn pose(&mut self, t: f32) -> Pose {
+    pub fn pose(&mut self, t: f64) -> Placement {
         match self {
             Motion::Static(p) => *p,
-            Motion::Keyframes(k) => keyframe_pose(k, t),
+            Motion::Keyframes(k) => keyframe_pose(k, t as f32),
             Motion::Path(p) => p.pose(t),
         }
     }
 }
 
-fn key_pose(k: &super::preset::Key) -> Pose {
-    Pose::new(k.position, euler(k.rotation))
+fn key_pose(k: &super::preset::Key) -> Placement {
+    Placement {
+        translation: k.position,
+        rotation: euler(k.rotation),
+    }
 }
 
-fn keyframe_pose(m: &KeyframeMotion, t: f32) -> Pose {
+fn keyframe_pose(m: &KeyframeMotion, t: f32) -> Placement {
     let keys = &m.keys;
     let last = keys[keys.len() - 1].t;
     let t = if m.looped && last > 0.0 { t % last } else { t };
@@ -78,7 +114,11 @@ fn keyframe_pose(m: &KeyframeMotion, t: f32) -> Pose {
         Interpolation::Smooth => u * u * (3.0 - 2.0 * u),
         Interpolation::Step => 0.0,
     };
-    key_pose(a).lerp(&key_pose(b), u)
+    let (a, b) = (key_pose(a), key_pose(b));
+    Placement {
+        translation: a.translation.lerp(b.translation, u as f64),
+        rotation: a.rotation.slerp(b.rotation, u).normalize(),
+    }
 }
 
 /// What drives a path.
@@ -93,7 +133,9 @@ pub enum Driver {
 /// One integrated sample of a path.
 #[derive(Clone, Copy, Debug, Default)]
 struct Sample {
-    xy: [f32; 2],
+    /// From the start (each step's increment is single precision; their
+    /// sum is exact in double).
+    xy: [f64; 2],
     heading: f32,
     distance: f32,
     /// Car body height over the front, rear, left and right wheels.
@@ -122,6 +164,7 @@ const SETTLED: f32 = 1e-15;
 #[derive(Clone, Debug)]
 pub struct Path {
     driver: Driver,
+    start: DVec3,
     samples: Vec<Sample>,
 }
 
@@ -150,10 +193,10 @@ impl Path {
         };
         Self {
             samples: vec![Sample {
-                xy: [start.x, start.y],
                 heading: heading.to_radians(),
                 ..Sample::default()
             }],
+            start,
             driver,
         }
     }
@@ -180,9 +223,9 @@ impl Path {
         }
     }
 
-    fn extend_to(&mut self, t: f32) {
+    fn extend_to(&mut self, t: f64) {
         let dt = 1.0 / PATH_RATE;
-        let needed = (t * PATH_RATE).ceil() as usize + 2;
+        let needed = (t * PATH_RATE as f64).ceil() as usize + 2;
         while self.samples.len() < needed {
             let k = self.samples.len() - 1;
             let s = self.samples[k];
@@ -214,7 +257,10 @@ impl Path {
                 }
             }
             self.samples.push(Sample {
-                xy: [s.xy[0] + v * cos(mid) * dt, s.xy[1] + v * sin(mid) * dt],
+                xy: [
+                    s.xy[0] + (v * cos(mid) * dt) as f64,
+                    s.xy[1] + (v * sin(mid) * dt) as f64,
+                ],
                 heading,
                 distance,
                 body,
@@ -223,15 +269,16 @@ impl Path {
         }
     }
 
-    fn pose(&mut self, t: f32) -> Pose {
+    fn pose(&mut self, t: f64) -> Placement {
         let t = t.max(0.0);
         self.extend_to(t);
-        let f = t * PATH_RATE;
+        let f = t * PATH_RATE as f64;
         let k = (f.floor() as usize).min(self.samples.len() - 2);
-        let u = f - k as f32;
+        let u64 = f - k as f64;
+        let u = u64 as f32;
         let (a, b) = (self.samples[k], self.samples[k + 1]);
-        let x = a.xy[0] + (b.xy[0] - a.xy[0]) * u;
-        let y = a.xy[1] + (b.xy[1] - a.xy[1]) * u;
+        let x = a.xy[0] + (b.xy[0] - a.xy[0]) * u64;
+        let y = a.xy[1] + (b.xy[1] - a.xy[1]) * u64;
         let heading = a.heading + (b.heading - a.heading) * u;
         let body: [f32; 4] = std::array::from_fn(|k| a.body[k] + (b.body[k] - a.body[k]) * u);
         match &self.driver {
@@ -240,18 +287,21 @@ impl Path {
                 let pitch = atan2(front - rear, c.wheelbase);
                 let roll = atan2(left - right, c.track);
                 let rotation = rotation_z(heading) * rotation_y(-pitch) * rotation_x(roll);
-                Pose::new(
-                    Vec3::new(x, y, c.start.z + 0.5 * (front + rear)),
-                    rotation.normalize(),
-                )
+                Placement {
+                    translation: self.start + DVec3::new(x, y, (0.5 * (front + rear)) as f64),
+                    rotation: rotation.normalize(),
+                }
             }
             Driver::Runner(r) => {
-                let phase = std::f32::consts::PI * r.stride_frequency * t;
-                let z = r.start.z + r.bob * sin(phase).abs();
+                let phase = std::f32::consts::PI * r.stride_frequency * t as f32;
+                let z = r.bob * sin(phase).abs();
                 let sway = 0.05 * sin(phase);
                 let rotation =
                     rotation_z(heading) * rotation_y(r.lean.to_radians()) * rotation_x(sway);
-                Pose::new(Vec3::new(x, y, z), rotation.normalize())
+                Placement {
+                    translation: self.start + DVec3::new(x, y, z as f64),
+                    rotation: rotation.normalize(),
+                }
             }
         }
     }
@@ -292,7 +342,7 @@ mod tests {
         let preset = crate::scene::load::load("flag_on_car", &[]).unwrap().preset;
         let mut motion = Motion::new(&preset.bodies[0]);
         for frame in 0..=60 * 60 {
-            let pose = motion.pose(frame as f32 / 60.0);
+            let pose = motion.pose(frame as f64 / 60.0).world();
             let parts = pose.rotation.to_array().into_iter();
             for v in parts.chain(pose.translation.to_array()) {
                 assert!(!v.is_subnormal(), "frame {frame}: {pose:?}");

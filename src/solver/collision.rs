@@ -59,6 +59,15 @@ impl Pose {
         }
     }
 
+    /// The inverse: `p.inverse().compose(&p)` is the identity.
+    pub fn inverse(&self) -> Pose {
+        let rotation = self.rotation.conjugate();
+        Pose {
+            translation: -(rotation * self.translation),
+            rotation,
+        }
+    }
+
     /// The pose a fraction `t ∈ [0, 1]` of the way from `self` to `other`.
     pub fn lerp(&self, other: &Pose, t: f32) -> Pose {
         Pose {
@@ -199,6 +208,21 @@ impl Collider {
         match self.body {
             Some(b) => bodies[b].compose(&self.pose),
             None => self.pose,
+        }
+    }
+
+    /// The collider's pose measured from `origin` (world coordinates), given
+    /// the body poses measured from it: a collider without a body stays
+    /// where it is in the world (the solver's floating origin,
+    /// [`super::frame`]).
+    pub fn pose_from(&self, bodies: &[Pose], origin: glam::DVec3) -> Pose {
+        match self.body {
+            Some(b) => bodies[b].compose(&self.pose),
+            None if origin == glam::DVec3::ZERO => self.pose,
+            None => Pose::new(
+                (self.pose.translation.as_dvec3() - origin).as_vec3(),
+                self.pose.rotation,
+            ),
         }
     }
 }

@@ -128,8 +128,8 @@ pub struct Diagnostics {
     /// How well the elements' normals follow the surface after the step.
     pub orientation: Orientation,
     /// Edges of the cloth's mesh that cross a triangle (see
-    /// [`Solver::self_crossings`](super::Solver::self_crossings)), while
-    /// self-collision is on.
+    /// [`Solver::self_crossings`](super::Solver::self_crossings)) at the
+    /// step's end, whatever self-collision's weight.
     pub self_crossings: Option<usize>,
     /// Wall times.
     pub timings: Timings,
@@ -356,11 +356,13 @@ pub fn max_strain(state: &ClothState, topology: &Topology) -> f32 {
     })
 }
 
-/// Kinetic energy `Σ ½ m |Δx / Δt|²` of the particles with mass, for substep `dt`.
-pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32) -> f32 {
+/// Kinetic energy `Σ ½ m |(Δx + D) / Δt|²` of the particles with mass, for
+/// substep `dt`, in world terms: `D` (`frame`) is how far the floating
+/// origin moved in the substep ([`super::frame`]).
+pub fn kinetic_energy(state: &ClothState, mass: &[f32], dt: f32, frame: Vec3) -> f32 {
     let mut e = 0.0f64;
     for (i, &m) in mass.iter().enumerate() {
-        let v = (state.position[i] - state.prev_position[i]) / dt;
+        let v = (state.position[i] - state.prev_position[i] + frame) / dt;
         e += 0.5 * m as f64 * v.length_squared() as f64;
     }
     e as f32

@@ -49,6 +49,7 @@ pub mod constraints;
 pub mod diagnostics;
 pub mod family;
 pub mod forced_rotation;
+pub mod frame;
 pub mod params;
 pub mod portable;
 mod team;
@@ -62,13 +63,14 @@ pub use collision::{Collider, Pose, Shape};
 pub use diagnostics::{Diagnostics, Orientation, Violation};
 pub use family::{Family, PerFamily, STRETCH_PASSES};
 pub use forced_rotation::ForcedRotation;
+pub use frame::Frame;
 pub use params::{
     ParamError, Params, REFERENCE_COMPLIANCE, Range, RangeError, Weights, Width, compliance_factor,
 };
 pub use topology::Topology;
 pub use update::Environment;
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
 use adjust::{Adjust, Colliders};
 use collision::Contact;
@@ -76,7 +78,8 @@ use constraints::self_collision::{self, Layers, SelfContacts};
 use constraints::{Particles, Shared, stretch};
 use diagnostics::CorrectionTrack;
 use family::{Compliance, Multipliers, Sweep};
-use update::{FREE, Reference};
+use frame::FrameStep;
+use update::{FREE, FrameMotion, Reference};
 
 /// A particle that follows a body exactly.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -182,6 +185,10 @@ pub struct Solver {
     collider_from: Vec<Pose>,
     collider_to: Vec<Pose>,
     contacts: Vec<Contact>,
+    /// The floating origin every position is measured from ([`frame`]).
+    frame: Frame,
+    /// The origin a step before `frame` (to tell a jerk).
+    origin_before: DVec3,
     time: f64,
     steps: u64,
     diagnostics: Option<Box<Diagnostics>>,
@@ -222,6 +229,8 @@ impl Solver {
             collider_to: Vec::new(),
             contacts: vec![Contact::default(); n],
             state,
+            frame: Frame::default(),
+            origin_before: DVec3::ZERO,
             time: 0.0,
             steps: 0,
             diagnostics: None,
@@ -382,6 +391,24 @@ impl Solver {
         &self.bodies
     }
 
+    /// The floating origin every position is measured from, and how it
+    /// moved in the last step ([`frame`]).
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// Measures every position from `frame.origin` (world coordinates)
+    /// from now on, the origin taken as moving by `frame.shift` a substep:
+    /// the cloth, its previous positions and the bodies' poses are taken
+    /// as measured from it already; colliders without a body stay where
+    /// they are in the world. For setting a scene up (before the first
+    /// step, the shift is the next step's: a cloth starts moving with its
+    /// origin), or an experiment.
+    pub fn set_frame(&mut self, frame: Frame) {
+        self.frame = frame;
+        self.origin_before = frame.origin - frame.shift * self.params.substeps as f64;
+    }
+
     /// Simulated time, in seconds.
     pub fn time(&self) -> f64 {
         self.time
@@ -502,6 +529,12 @@ impl Solver {
         self_collision::crossings(&self.state.position, &self.topology.triangles, &self.spec)
     }
 
+    /// Where the edges [`Solver::self_crossings`] counts pass through their
+    /// triangles, one point each.
+    pub fn self_crossing_points(&self) -> Vec<Vec3> {
+        self_collision::crossing_points(&self.state.position, &self.topology.triangles, &self.spec)
+    }
+
     /// The largest strain of a weft or warp edge.
     pub fn max_strain(&self) -> f32 {
         diagnostics::max_strain(&self.state, &self.topology)
@@ -509,7 +542,12 @@ impl Solver {
 
     /// The kinetic energy of the free particles, in joules.
     pub fn kinetic_energy(&self) -> f32 {
-        diagnostics::kinetic_energy(&self.state, &self.mass, self.params.substep_dt())
+        diagnostics::kinetic_energy(
+            &self.state,
+            &self.mass,
+            self.params.substep_dt(),
+            self.frame.shift.as_vec3(),
+        )
     }
 
     /// Advances by `Δt`: the bodies move from their current poses to `bodies`.
@@ -525,6 +563,22 @@ impl Solver {
         &mut self,
         env: &Environment,
         bodies: &[Pose],
+        after_substep: &mut dyn FnMut(&ClothState),
+    ) -> Result<(), StepError> {
+        let origin = self.frame.origin;
+        self.step_in_frame(env, bodies, origin, after_substep)
+    }
+
+    /// [`Solver::step_with`], the origin moving to `origin` (world
+    /// coordinates) over the step, steadily, and `bodies` measured from it
+    /// there ([`frame`]). A scene moves the origin with what carries the
+    /// cloth, so that neither where the cloth is nor how fast it is carried
+    /// changes a bit of how it moves.
+    pub fn step_in_frame(
+        &mut self,
+        env: &Environment,
+        bodies: &[Pose],
+        origin: DVec3,
         after_substep: &mut dyn FnMut(&ClothState),
     ) -> Result<(), StepError> {
         let step = self.steps + 1;
@@ -544,8 +598,12 @@ impl Solver {
         let substeps = self.params.substeps;
         let dt = self.params.substep_dt();
         let rot = self.forced_rotation();
+        let frame = self.frame.step_to(origin, substeps, self.steps == 0);
         if self.self_collision_on() {
-            self.watch_for_jerks(bodies);
+            self.watch_for_jerks(bodies, origin);
+        }
+        if self.steps == 0 {
+            self.start_with_carriers(bodies);
         }
         for sub in 0..substeps {
             let (f0, f1) = (
@@ -558,7 +616,7 @@ impl Solver {
                 self.sub_from.push(from.lerp(to, f0));
                 self.sub_to.push(from.lerp(to, f1));
             }
-            let result = self.substep(env, dt, &rot, sub + 1 == substeps);
+            let result = self.substep(env, dt, &rot, &frame, sub, sub + 1 == substeps);
             std::mem::swap(&mut self.last_from, &mut self.sub_from);
             if let Err((phase, particle, quantity, value)) = result {
                 self.state.copy_from(&self.last_good);
@@ -574,9 +632,18 @@ impl Solver {
         }
         self.bodies_before.copy_from_slice(&self.bodies);
         self.bodies.copy_from_slice(bodies);
-        // The crossings at the step's end, for the diagnostics.
-        let crossings =
-            (self.self_collision_on() && self.diagnostics.is_some()).then(|| self.find_tangles());
+        self.origin_before = self.frame.origin;
+        self.frame = Frame::after(&frame, origin);
+        // The crossings at the step's end, for the diagnostics, whatever
+        // self-collision's weight (a cloth that passes through itself is
+        // shown, on or off); on, they are also its tangles.
+        let crossings = self.diagnostics.is_some().then(|| {
+            if self.self_collision_on() {
+                self.find_tangles()
+            } else {
+                self.self_crossings()
+            }
+        });
         self.time += self.params.dt as f64;
         self.steps = step;
         if self.diagnostics.is_some() {
@@ -592,7 +659,12 @@ impl Solver {
                 fd.violation = v;
             }
             d.max_strain = diagnostics::max_strain(&self.state, &self.topology);
-            d.kinetic_energy = diagnostics::kinetic_energy(&self.state, &self.mass, dt);
+            d.kinetic_energy = diagnostics::kinetic_energy(
+                &self.state,
+                &self.mass,
+                dt,
+                self.frame.shift.as_vec3(),
+            );
             d.timings.total = start.map(|s| s.elapsed()).unwrap_or_default();
         }
         Ok(())
@@ -606,6 +678,8 @@ impl Solver {
         env: &Environment,
         dt: f32,
         rot: &ForcedRotation,
+        frame: &FrameStep,
+        sub: u32,
         last: bool,
     ) -> Result<(), NonFinite> {
         if self.self_collision_on() && self.self_contacts.leave_tangles_this_substep() {
@@ -622,6 +696,10 @@ impl Solver {
                 from: &self.last_from,
                 to: &self.sub_from,
             },
+            FrameMotion {
+                before: frame.before(sub),
+                kick: frame.kick(sub),
+            },
             env,
             self.spec.density,
             self.params.substep_damping(),
@@ -636,9 +714,14 @@ impl Solver {
 
         self.collider_from.clear();
         self.collider_to.clear();
+        let substeps = self.params.substeps;
+        let (o0, o1) = (
+            frame.origin_at(sub as f64 / substeps as f64, substeps),
+            frame.origin_at((sub + 1) as f64 / substeps as f64, substeps),
+        );
         for c in &self.colliders {
-            self.collider_from.push(c.world_pose(&self.sub_from));
-            self.collider_to.push(c.world_pose(&self.sub_to));
+            self.collider_from.push(c.pose_from(&self.sub_from, o0));
+            self.collider_to.push(c.pose_from(&self.sub_to, o1));
         }
         self.contacts.fill(Contact::default());
         if self.self_collision_on() {
@@ -739,15 +822,18 @@ impl Solver {
     /// millimetres a step). The cloth it drags through itself then comes
     /// apart instead of being held tangled by contacts that keep each
     /// particle's side.
-    fn watch_for_jerks(&mut self, bodies: &[Pose]) {
+    fn watch_for_jerks(&mut self, bodies: &[Pose], origin: DVec3) {
         let (dx, dy) = self.spec.spacing();
-        let limit = JERK * dx.min(dy);
-        let at = |poses: &[Pose], a: &Attachment| poses[a.body].compose(&a.local).translation;
+        let limit = JERK as f64 * dx.min(dy) as f64;
+        // In world coordinates: the origin may carry the attachments.
+        let at = |poses: &[Pose], origin: DVec3, a: &Attachment| {
+            origin + poses[a.body].compose(&a.local).translation.as_dvec3()
+        };
         let jerk = self.attachments.iter().any(|a| {
             let (before, from, to) = (
-                at(&self.bodies_before, a),
-                at(&self.bodies, a),
-                at(bodies, a),
+                at(&self.bodies_before, self.origin_before, a),
+                at(&self.bodies, self.frame.origin, a),
+                at(bodies, origin, a),
             );
             !((to - from) - (from - before)).length().le(&limit)
         });
@@ -817,6 +903,47 @@ impl Solver {
         );
         if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
             d.timings.collisions += t.elapsed();
+        }
+    }
+
+    /// Before the first step: every free particle, and the reference motion
+    /// damping measures it against, starts with the motion of the body it
+    /// follows (its turn; the origin carries the translation, [`frame`]),
+    /// so a cloth on a body that is already moving starts in steady motion.
+    /// The motion is the body's over the first substep, taken as under way.
+    fn start_with_carriers(&mut self, bodies: &[Pose]) {
+        self.refresh_tethers();
+        let substeps = self.params.substeps as f32;
+        // Each body's motion over a substep, `M = P(Δt/s) ∘ P(0)⁻¹`, and
+        // the pose it came from, `M⁻¹ ∘ P(0)`.
+        let motions: Vec<Option<Pose>> = self
+            .bodies
+            .iter()
+            .zip(bodies)
+            .map(|(from, to)| {
+                (from != to).then(|| {
+                    let next = from.lerp(to, 1.0 / substeps);
+                    next.compose(&from.inverse())
+                })
+            })
+            .collect();
+        for (b, m) in motions.iter().enumerate() {
+            if let Some(m) = m {
+                self.last_from[b] = m.inverse().compose(&self.bodies[b]);
+            }
+        }
+        for i in 0..self.state.len() {
+            let Some(Some(m)) = motions.get(self.reference_body[i] as usize) else {
+                continue;
+            };
+            let back = m.inverse();
+            if self.inv_mass[i] > 0.0 {
+                self.state.prev_position[i] = back.transform_point(self.state.position[i]);
+            }
+            if self.inv_inertia[i] > 0.0 {
+                self.state.prev_orientation[i] =
+                    (back.rotation * self.state.orientation[i]).normalize();
+            }
         }
     }
 

@@ -13,6 +13,11 @@
 //! `q(t) q(t−Δt)⁻¹`, relative to the reference body's own turn, as a
 //! rotation vector scaled by `k`, is applied again on top of that turn.
 //!
+//! Positions are measured from the solver's floating origin
+//! ([`super::frame`]): the update adds the frame's kick `D_prev − D` (the
+//! fictitious force of an accelerating origin), and air drag sees the world
+//! velocity, the particle's motion plus the origin's.
+//!
 //! The acceleration is gravity plus wind acting on the oriented element. With
 //! relative wind `u = v_air − v` and normal `n`, the pressure on the element is
 //! `½ ρ_air C_n (u·n)|u·n|` along `n`, plus a small skin friction
@@ -97,6 +102,18 @@ pub(crate) struct Reference<'a> {
     pub to: &'a [Pose],
 }
 
+/// How the floating origin moves, as one substep's update sees it
+/// ([`super::frame`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct FrameMotion {
+    /// The origin's motion over the substep before (added to a particle's
+    /// own motion for its world velocity, which air drag sees).
+    pub before: Vec3,
+    /// The frame's kick: `D_prev − D`, the fictitious force of an
+    /// accelerating origin, as a displacement.
+    pub kick: Vec3,
+}
+
 /// [`Reference::body_of`] for a particle that follows no body.
 pub(crate) const FREE: u32 = u32::MAX;
 
@@ -117,6 +134,7 @@ pub(crate) fn integrate(
     inv_mass: &[f32],
     inv_inertia: &[f32],
     reference: &Reference,
+    frame: FrameMotion,
     env: &Environment,
     areal_density: f32,
     damping: f32,
@@ -142,6 +160,9 @@ pub(crate) fn integrate(
         dt,
         mean,
         motions: &motions,
+        frame,
+        moving: frame.before != Vec3::ZERO,
+        kicked: frame.kick != Vec3::ZERO,
     };
     let n = state.len();
     let (x, prev_x) = (
@@ -187,6 +208,13 @@ struct Step<'a> {
     mean: Vec3,
     /// Each body's rigid motion over the last substep.
     motions: &'a [Pose],
+    /// How the origin moves.
+    frame: FrameMotion,
+    /// Whether the origin moved over the last substep (else a particle's
+    /// motion is its world motion, and nothing is added to it).
+    moving: bool,
+    /// Whether this substep has a kick (else nothing is added).
+    kicked: bool,
 }
 
 impl Step<'_> {
@@ -198,11 +226,21 @@ impl Step<'_> {
         let carried = carrier.map_or(self.mean, |m| m.transform_point(before) - before);
         let mut acc = self.env.gravity;
         if self.with_wind {
-            let v = disp / self.dt;
+            let world = if self.moving {
+                disp + self.frame.before
+            } else {
+                disp
+            };
+            let v = world / self.dt;
             acc += wind_acceleration(self.env, self.areal_density, normal_of(q), v, self.dt);
         }
         *prev = now;
-        *x = now + carried + (disp - carried) * self.damping + acc * (self.dt * self.dt);
+        let next = now + carried + (disp - carried) * self.damping + acc * (self.dt * self.dt);
+        *x = if self.kicked {
+            next + self.frame.kick
+        } else {
+            next
+        };
     }
 
     /// Turns a particle with inertia, carried by `carrier`.

@@ -104,7 +104,7 @@ pub fn log_planes(rec: &RecordingStream, scene: &Scene, x: &[Vec3]) -> Recording
     let half = 0.5 * GROUND_SPAN * spec.width.max(spec.height);
     let centre = centre(x);
     for (k, (c, section)) in planes {
-        let world = c.world_pose(solver.bodies());
+        let world = c.world_pose(scene.body_poses());
         let corners = patch(&c.pose, world.inverse_transform_point(centre), half);
         rec.log(
             path(section, k),

@@ -59,9 +59,14 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
             .map(|a| ramp(a / std::f32::consts::PI))
             .collect(),
         ColorBy::Speed => {
+            // World speed: the particle's motion plus the origin's.
             let dt = solver.params().substep_dt();
+            let frame = solver.frame().shift.as_vec3();
             (0..n)
-                .map(|i| ramp((state.position[i] - state.prev_position[i]).length() / dt / 10.0))
+                .map(|i| {
+                    let d = state.position[i] - state.prev_position[i] + frame;
+                    ramp(d.length() / dt / 10.0)
+                })
                 .collect()
         }
         ColorBy::Correction

@@ -29,7 +29,7 @@ impl Telemetry {
     /// corrections and, if asked for, the hover values.
     pub(super) fn log_full(&mut self, scene: &Scene, radius: f32) -> RecordingStreamResult<()> {
         let solver = scene.solver();
-        let x = &solver.state().position;
+        let x = &*scene.world_positions();
         let normals: Vec<Vec3> = (0..x.len()).map(|i| solver.state().normal(i)).collect();
         self.rec
             .log(paths::MESH, &batch::mesh_update(x, &normals))?;

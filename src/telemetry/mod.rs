@@ -108,6 +108,8 @@ pub struct Telemetry {
     /// What the frames logged so far left on screen of what only level
     /// full draws.
     drawn: full::Drawn,
+    /// Whether the last logged frame marked crossings.
+    crossings_drawn: bool,
 }
 
 impl Telemetry {
@@ -121,6 +123,7 @@ impl Telemetry {
             last_cost: Duration::ZERO,
             particle_values: false,
             drawn: full::Drawn::default(),
+            crossings_drawn: false,
         }
     }
 
@@ -356,7 +359,7 @@ impl Telemetry {
         self.set_time(frame, scene.time());
         let solver = scene.solver();
         let diag = solver.diagnostics();
-        let x = &solver.state().position;
+        let x = &*scene.world_positions();
         let rec = &self.rec;
 
         // Scalars (none before the first step: there is nothing to measure).
@@ -421,6 +424,7 @@ impl Telemetry {
                 .with_radii([radius]),
         )?;
         colliders::log_planes(rec, scene, x)?;
+        self.log_crossings(scene, radius)?;
 
         if self.settings.level == Level::Full {
             self.log_full(scene, radius)?;
@@ -429,6 +433,30 @@ impl Telemetry {
         }
         self.log_bodies(scene)?;
         self.last_cost = start.elapsed();
+        Ok(())
+    }
+
+    /// Marks where the cloth passes through itself, whatever
+    /// self-collision's weight: a red point where each crossing edge meets
+    /// its triangle (the crossings measured at the step's end, so at level
+    /// summary and full); blanked once there are none.
+    fn log_crossings(&mut self, scene: &Scene, radius: f32) -> RecordingStreamResult<()> {
+        let solver = scene.solver();
+        let n = solver.diagnostics().and_then(|d| d.self_crossings);
+        if n.unwrap_or(0) == 0 {
+            if std::mem::take(&mut self.crossings_drawn) {
+                self.rec.log(paths::CROSSINGS, &batch::points(&[]))?;
+            }
+            return Ok(());
+        }
+        let points = scene.to_world(&solver.self_crossing_points());
+        self.rec.log(
+            paths::CROSSINGS,
+            &batch::points(&points)
+                .with_colors([rerun::Color::from_rgb(255, 40, 40)])
+                .with_radii([2.0 * radius]),
+        )?;
+        self.crossings_drawn = true;
         Ok(())
     }
 

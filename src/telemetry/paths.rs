@@ -13,6 +13,9 @@ pub const WORLD: &str = "world";
 pub const PARTICLES: &str = "world/cloth/particles";
 /// The cloth surface.
 pub const MESH: &str = "world/cloth/mesh";
+/// Where the cloth passes through itself: a point where each crossing
+/// edge meets its triangle.
+pub const CROSSINGS: &str = "world/cloth/crossings";
 /// Element normals.
 pub const NORMALS: &str = "world/cloth/normals";
 /// Static topology (index arrays).

@@ -136,6 +136,10 @@ pub struct Status {
     pub max_violation: PerFamily<f32>,
     /// Largest edge strain after the last step.
     pub max_strain: f32,
+    /// Edges of the cloth crossing one of its triangles after the last
+    /// step (the cloth passing through itself), whatever self-collision's
+    /// weight.
+    pub crossings: usize,
     /// Digest of the current state (see `ClothState::digest`), in hex.
     pub digest: String,
     /// The preset's `[expect]` bounds against the run's values so far.

@@ -412,10 +412,14 @@ impl Worker {
             playing: self.playing,
             speed: self.speed,
             steps_per_second: self.recent.len() as f32,
-            violations: scene
-                .solver()
-                .diagnostics()
-                .map(|d| (d.families.map(|_, f| f.violation.max), d.max_strain)),
+            violations: scene.solver().diagnostics().map(|d| {
+                let crossings = d.self_crossings.unwrap_or(0);
+                (
+                    d.families.map(|_, f| f.violation.max),
+                    d.max_strain,
+                    crossings,
+                )
+            }),
             digest: figures.final_state,
             checks,
             checkpoints: self.history.checkpoints(),
@@ -431,7 +435,7 @@ struct Progress {
     playing: bool,
     speed: f32,
     steps_per_second: f32,
-    violations: Option<(PerFamily<f32>, f32)>,
+    violations: Option<(PerFamily<f32>, f32, usize)>,
     digest: String,
     checks: Vec<Check>,
     checkpoints: (usize, u64),
@@ -445,9 +449,10 @@ impl Progress {
         s.playing = self.playing;
         s.speed = self.speed;
         s.steps_per_second = self.steps_per_second;
-        if let Some((max_violation, max_strain)) = self.violations {
+        if let Some((max_violation, max_strain, crossings)) = self.violations {
             s.max_violation = max_violation;
             s.max_strain = max_strain;
+            s.crossings = crossings;
         }
         s.digest = self.digest;
         s.checks = self.checks;

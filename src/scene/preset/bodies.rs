@@ -1,7 +1,7 @@
 //! Moving bodies: a name and exactly one motion script each (static,
 //! keyframes, a car on a road, a runner). `scene::motion` brings them to life.
 
-use glam::Vec3;
+use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::EulerDegrees;
@@ -30,8 +30,8 @@ pub struct BodySection {
 #[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct StaticMotion {
-    /// Position, in metres.
-    pub position: Vec3,
+    /// Position, in metres (world positions are read in double precision).
+    pub position: DVec3,
     /// Orientation, XYZ Euler degrees.
     pub rotation: EulerDegrees,
 }
@@ -57,7 +57,7 @@ pub struct Key {
     pub t: f32,
     /// Position, in metres.
     #[serde(default)]
-    pub position: Vec3,
+    pub position: DVec3,
     /// Orientation, XYZ Euler degrees.
     #[serde(default)]
     pub rotation: EulerDegrees,
@@ -82,7 +82,7 @@ pub struct KeyframeMotion {
 #[serde(deny_unknown_fields, default)]
 pub struct CarMotion {
     /// Start position, in metres.
-    pub start: Vec3,
+    pub start: DVec3,
     /// Initial heading, degrees from +X toward +Y.
     pub heading: f32,
     /// Speed keyframes `[t s, v m/s]`, linear between keys; a steep drop is hard braking.
@@ -100,7 +100,7 @@ pub struct CarMotion {
 impl Default for CarMotion {
     fn default() -> Self {
         Self {
-            start: Vec3::ZERO,
+            start: DVec3::ZERO,
             heading: 0.0,
             speed: vec![[0.0, 0.0]],
             yaw_rate: Vec::new(),
@@ -152,7 +152,7 @@ pub struct Rough {
 #[serde(deny_unknown_fields, default)]
 pub struct RunnerMotion {
     /// Start position of the body frame (on the ground, between the feet), in metres.
-    pub start: Vec3,
+    pub start: DVec3,
     /// Initial heading, degrees from +X toward +Y.
     pub heading: f32,
     /// Running speed, in m/s.
@@ -172,7 +172,7 @@ pub struct RunnerMotion {
 impl Default for RunnerMotion {
     fn default() -> Self {
         Self {
-            start: Vec3::ZERO,
+            start: DVec3::ZERO,
             heading: 0.0,
             speed: 4.0,
             stride_frequency: 1.4,

@@ -15,6 +15,11 @@ pub struct Expect {
     pub max_strain: Option<f32>,
     /// Largest violation allowed at any frame, per family.
     pub max_violation: FamilyBounds,
+    /// Most edges allowed to cross a triangle of the cloth at any logged
+    /// frame (0: the cloth never passes through itself). A whole number;
+    /// read as a number so that a wrong one is refused with its range.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_crossings: Option<f64>,
     /// Kinetic energy (J) the cloth must be below at the end.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub settle_energy: Option<f32>,
@@ -27,6 +32,7 @@ impl Default for Expect {
         Self {
             max_strain: None,
             max_violation: FamilyBounds::default(),
+            max_crossings: None,
             settle_energy: None,
             finite: true,
         }

@@ -9,7 +9,7 @@
 //! `scene::load` turns that key into a file, line and column.
 //! [`Preset::warnings`] (in [`warnings`]) flags what is valid but costly.
 
-use glam::{Quat, Vec3};
+use glam::{DVec3, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 use crate::solver::{ClothSpec, Params, portable};
@@ -102,8 +102,10 @@ pub struct ClothSection {
     /// Largest seeded deviation of the rest layout from flat, in metres
     /// (see [`ClothSpec::imperfection`]).
     pub imperfection: f32,
-    /// World position of particle (0, 0) at rest, in metres.
-    pub position: Vec3,
+    /// World position of particle (0, 0) at rest, in metres (read in
+    /// double precision: the scene measures it from the solver's floating
+    /// origin, [`crate::solver::frame`]).
+    pub position: DVec3,
     /// Rest orientation, XYZ Euler degrees; the weft runs along local X, the
     /// warp along local Y, the normal along local Z.
     pub rotation: EulerDegrees,
@@ -121,15 +123,21 @@ impl Default for ClothSection {
             thickness: d.thickness,
             friction: d.friction,
             imperfection: d.imperfection,
-            position: Vec3::ZERO,
+            position: DVec3::ZERO,
             rotation: [0.0; 3],
         }
     }
 }
 
 impl ClothSection {
-    /// The solver's cloth description.
+    /// The solver's cloth description, in world coordinates.
     pub fn spec(&self) -> ClothSpec {
+        self.spec_from(DVec3::ZERO)
+    }
+
+    /// The solver's cloth description, its position measured from
+    /// `origin` (world coordinates).
+    pub fn spec_from(&self, origin: DVec3) -> ClothSpec {
         ClothSpec {
             width: self.width,
             height: self.height,
@@ -139,7 +147,7 @@ impl ClothSection {
             thickness: self.thickness,
             friction: self.friction,
             imperfection: self.imperfection,
-            origin: self.position,
+            origin: (self.position - origin).as_vec3(),
             rotation: euler(self.rotation),
         }
     }

@@ -59,7 +59,7 @@ impl Preset {
             .unit(" s")
             .check("duration", self.duration)?;
         let cloth = &self.cloth;
-        POSITION.check_each("cloth.position", &cloth.position.to_array())?;
+        POSITION.check_each("cloth.position", &cloth.position.as_vec3().to_array())?;
         EULER.check_each("cloth.rotation", &cloth.rotation)?;
         cloth.spec().validate()?;
         let env = &self.environment;
@@ -97,6 +97,20 @@ impl Preset {
             };
             bound("expect.max_strain", e.max_strain)?;
             bound("expect.settle_energy", e.settle_energy)?;
+            if let Some(n) = e.max_crossings {
+                let key = "expect.max_crossings";
+                Range::new(0.0, 1e9)
+                    .unit(" crossing edges")
+                    .check(key, n as f32)?;
+                if n.fract() != 0.0 {
+                    return Err(Invalid::new(
+                        key,
+                        format!(
+                            "{n} is not a whole number of crossing edges (allowed: 0, 1, 2, …)"
+                        ),
+                    ));
+                }
+            }
             for f in Family::ALL {
                 let key = format!("expect.max_violation.{}", f.name());
                 bound(&key, e.max_violation[f])?;
@@ -209,7 +223,7 @@ fn validate_body(at: &str, body: &BodySection) -> Result<(), Invalid> {
         ));
     }
     if let Some(m) = &body.fixed {
-        POSITION.check_each(key("static.position"), &m.position.to_array())?;
+        POSITION.check_each(key("static.position"), &m.position.as_vec3().to_array())?;
         EULER.check_each(key("static.rotation"), &m.rotation)?;
     }
     if let Some(m) = &body.keyframes {
@@ -230,12 +244,12 @@ fn validate_body(at: &str, body: &BodySection) -> Result<(), Invalid> {
                 ));
             }
             last = pose.t;
-            POSITION.check_each(key("position"), &pose.position.to_array())?;
+            POSITION.check_each(key("position"), &pose.position.as_vec3().to_array())?;
             EULER.check_each(key("rotation"), &pose.rotation)?;
         }
     }
     if let Some(m) = &body.car {
-        POSITION.check_each(key("car.start"), &m.start.to_array())?;
+        POSITION.check_each(key("car.start"), &m.start.as_vec3().to_array())?;
         HEADING.check(key("car.heading"), m.heading)?;
         if m.speed.is_empty() {
             return Err(Invalid::new(
@@ -271,7 +285,7 @@ fn validate_body(at: &str, body: &BodySection) -> Result<(), Invalid> {
         }
     }
     if let Some(m) = &body.runner {
-        POSITION.check_each(key("runner.start"), &m.start.to_array())?;
+        POSITION.check_each(key("runner.start"), &m.start.as_vec3().to_array())?;
         HEADING.check(key("runner.heading"), m.heading)?;
         let speed = Range::new(0.0, 15.0).unit(" m/s");
         speed.check(key("runner.speed"), m.speed)?;

@@ -54,7 +54,7 @@ use crate::solver::cloth::normal_of;
 use crate::solver::topology::Touches;
 
 pub(crate) use pick::{Layers, SelfContacts};
-pub use tangles::{ON_PLANE, crossings, for_each_close};
+pub use tangles::{ON_PLANE, crossing_points, crossings, for_each_close};
 
 /// One particle against one triangle, with the side it keeps.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -108,8 +108,16 @@ fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
 /// which lies within half the longest edge of the triangle's box.
 pub fn crossings(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> usize {
     let mut count = 0;
-    scan_crossings(x, triangles, spec, None, |_, _| count += 1);
+    scan_crossings(x, triangles, spec, None, |_, _, _| count += 1);
     count
+}
+
+/// Where the edges that [`crossings`] counts pass through their triangles:
+/// one point per crossing, in the order they are found.
+pub fn crossing_points(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> Vec<Vec3> {
+    let mut points = Vec::new();
+    scan_crossings(x, triangles, spec, None, |_, _, at| points.push(at));
+    points
 }
 
 impl SelfContacts {
@@ -128,7 +136,7 @@ impl SelfContacts {
         self.tangled.resize(x.len(), false);
         let tangled = &mut self.tangled;
         let mut count = 0;
-        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri| {
+        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri, _| {
             count += 1;
             for k in edge.into_iter().chain(tri) {
                 tangled[k as usize] = true;
@@ -176,7 +184,7 @@ fn scan_crossings(
     triangles: &[[u32; 3]],
     spec: &ClothSpec,
     near: Option<&NearTriangles>,
-    mut crossing: impl FnMut([u32; 2], [u32; 3]),
+    mut crossing: impl FnMut([u32; 2], [u32; 3], Vec3),
 ) {
     // Half the longest edge at each particle.
     let half: Vec<f32> = (0..x.len() as u32)
@@ -265,7 +273,7 @@ impl TriangleCrossing {
         p: u32,
         x: &[Vec3],
         spec: &ClothSpec,
-        crossing: &mut impl FnMut([u32; 2], [u32; 3]),
+        crossing: &mut impl FnMut([u32; 2], [u32; 3], Vec3),
     ) {
         let tri = self.corners;
         if tri.contains(&p) {
@@ -292,8 +300,8 @@ impl TriangleCrossing {
             }
             let t = &self.t;
             let margins = self.margins.get_or_insert_with(|| edge_margins(t));
-            if crosses_at(xp, xo, (dp, d_o), t, margins).is_some() {
-                crossing([p, o], tri);
+            if let Some(at) = crosses_at(xp, xo, (dp, d_o), t, margins) {
+                crossing([p, o], tri, xp + (xo - xp) * at);
             }
         }
     }
