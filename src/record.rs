@@ -377,6 +377,11 @@ pub fn table(figures: &Figures, checks: &[Check]) -> String {
     }
     s += &format!(
         "  {:<28} {:>12}\n",
+        "max crossing edges",
+        figures.max_crossings
+    );
+    s += &format!(
+        "  {:<28} {:>12}\n",
         "final kinetic energy (J)",
         format!("{:.3e}", figures.final_kinetic_energy)
     );

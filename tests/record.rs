@@ -767,3 +767,43 @@ fn the_avx2_and_the_baseline_kernels_give_the_same_bits() {
         );
     }
 }
+
+/// A cloth that passes through itself is shown whatever self-collision's
+/// weight: at level summary the crossings are plotted at every frame,
+/// marked in the 3D view where they are, counted in the figures, and an
+/// `[expect] max_crossings` bound fails the run.
+#[test]
+fn crossings_are_measured_and_drawn_with_self_collision_off() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("windy_flag.rrd");
+    let overrides = ["telemetry.level=\"summary\"", "solver.weights.self=0"];
+    let frames = 360;
+    let figures = record_to(&path, "windy_flag", &overrides, frames, |_| {});
+    let rec = read::read(&path).unwrap();
+    let counts = &rec.scalars[paths::SELF_CROSSINGS];
+    assert_eq!(counts.len(), frames as usize, "one count per frame");
+    let most = counts.iter().map(|s| s.value).fold(0.0, f64::max);
+    assert!(most > 0.0, "the flag never crossed itself in {frames} frames");
+    assert_eq!(figures.max_crossings as f64, most);
+    let marked = rec.frames(paths::CROSSINGS);
+    let crossing = counts.iter().filter(|s| s.value > 0.0).map(|s| s.frame);
+    for frame in crossing {
+        assert!(marked.contains(&frame), "frame {frame} crosses, unmarked");
+    }
+    let loaded = load::load("windy_flag", &sets(&["expect.max_crossings=0"])).unwrap();
+    let checks = weft::record::verdict(loaded.preset.expect.as_ref(), &figures);
+    let check = checks.iter().find(|c| c.bound == "expect.max_crossings");
+    assert!(check.is_some_and(|c| !c.ok), "{checks:?}");
+}
+
+#[test]
+fn a_bad_crossing_bound_is_refused_with_its_range() {
+    for (set, says) in [
+        ("expect.max_crossings=-1", "allowed"),
+        ("expect.max_crossings=1.5", "whole number"),
+    ] {
+        let err = load::load("windy_flag", &sets(&[set])).unwrap_err().to_string();
+        assert!(err.contains("expect.max_crossings"), "{set}: {err}");
+        assert!(err.contains(says), "{set}: {err}");
+    }
+}
