@@ -46,9 +46,19 @@ pub struct Figures {
     /// measured frame (the cloth passing through itself; measured at every
     /// frame with diagnostics, whatever self-collision's weight).
     pub max_crossings: u64,
+    /// How many measured frames had a crossing edge.
+    pub crossing_frames: u64,
     /// The solver's floating origin at the last frame, in world
     /// coordinates (none in a recording made before weft had one).
     pub final_origin: Option<[f64; 3]>,
+}
+
+impl Figures {
+    /// Counts a measured frame with `n` crossing edges.
+    fn count_crossings(&mut self, n: usize) {
+        self.max_crossings = self.max_crossings.max(n as u64);
+        self.crossing_frames += u64::from(n > 0);
+    }
 }
 
 /// One `[expect]` bound checked against the figures.
@@ -226,8 +236,8 @@ impl Run {
         let bounded =
             (self.scene.preset().expect.as_ref()).is_some_and(|e| e.max_crossings.is_some());
         if self.scene.solver().diagnostics().is_none() && bounded {
-            let n = self.scene.solver().self_crossings() as u64;
-            self.figures.max_crossings = self.figures.max_crossings.max(n);
+            let n = self.scene.solver().self_crossings();
+            self.figures.count_crossings(n);
         }
     }
 
@@ -341,7 +351,7 @@ fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
     };
     f.max_strain = f.max_strain.max(strain);
     if let Some(n) = solver.diagnostics().and_then(|d| d.self_crossings) {
-        f.max_crossings = f.max_crossings.max(n as u64);
+        f.count_crossings(n);
     }
     for (fam, &v) in violations.iter() {
         let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);
@@ -379,6 +389,10 @@ pub fn table(figures: &Figures, checks: &[Check]) -> String {
         "  {:<28} {:>12}\n",
         "max crossing edges",
         figures.max_crossings
+    );
+    s += &format!(
+        "  {:<28} {:>12}\n",
+        "frames with crossings", figures.crossing_frames
     );
     s += &format!(
         "  {:<28} {:>12}\n",

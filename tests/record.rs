@@ -785,6 +785,8 @@ fn crossings_are_measured_and_drawn_with_self_collision_off() {
     let most = counts.iter().map(|s| s.value).fold(0.0, f64::max);
     assert!(most > 0.0, "the flag never crossed itself in {frames} frames");
     assert_eq!(figures.max_crossings as f64, most);
+    let frames_crossing = counts.iter().filter(|s| s.value > 0.0).count() as u64;
+    assert_eq!(figures.crossing_frames, frames_crossing);
     let marked = rec.frames(paths::CROSSINGS);
     let crossing = counts.iter().filter(|s| s.value > 0.0).map(|s| s.frame);
     for frame in crossing {

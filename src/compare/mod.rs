@@ -228,6 +228,9 @@ fn rebuild_figures(rec: &read::Recording) -> Figures {
         failure,
         final_state: String::new(),
         max_crossings: max_of(paths::SELF_CROSSINGS) as u64,
+        crossing_frames: rec.scalars.get(paths::SELF_CROSSINGS).map_or(0, |s| {
+            s.iter().filter(|x| x.value > 0.0).count() as u64
+        }),
         final_origin: None,
     }
 }
