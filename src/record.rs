@@ -387,8 +387,7 @@ pub fn table(figures: &Figures, checks: &[Check]) -> String {
     }
     s += &format!(
         "  {:<28} {:>12}\n",
-        "max crossing edges",
-        figures.max_crossings
+        "max crossing edges", figures.max_crossings
     );
     s += &format!(
         "  {:<28} {:>12}\n",

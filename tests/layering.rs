@@ -1,12 +1,57 @@
-//! The layering, checked: `src/solver/` uses nothing above it.
+//! The layering, checked: each module of `src/` uses only the modules and
+//! crates its layer may (ARCHITECTURE.md, "Layers").
 //!
-//! The solver is the method and nothing else. It must not name Rerun, egui,
-//! eframe, TOML or any of weft's upper layers (`scene`, `telemetry`,
-//! `record`, `replay`, `app`, `cli`), so that it can be read, tested and
-//! reused on its own. This test reads every source file under `src/solver/`
-//! and fails with the file and line of each path that reaches upward.
+//! The solver is the method and nothing else: it must not name Rerun, egui,
+//! eframe, TOML or any of weft's other modules, so that it can be read,
+//! tested and reused on its own. Above it, each layer uses only the layers
+//! below it ([`ALLOWED`]); only the desktop debugger (`app`) knows egui,
+//! eframe and the Rerun viewer; `compare` and `sweep` are libraries, their
+//! command lines live in `cli`. This test reads every source file under
+//! `src/` and fails with the file and line of each path that reaches where
+//! its module may not.
 
 use std::path::{Path, PathBuf};
+
+/// Each module of the crate and the modules it may use.
+const ALLOWED: [(&str, &[&str]); 10] = [
+    ("solver", &[]),
+    ("scene", &["solver"]),
+    ("telemetry", &["scene", "solver"]),
+    ("record", &["telemetry", "scene", "solver"]),
+    ("replay", &["record", "telemetry", "scene", "solver"]),
+    (
+        "compare",
+        &["record", "replay", "telemetry", "scene", "solver"],
+    ),
+    (
+        "sweep",
+        &[
+            "compare",
+            "record",
+            "replay",
+            "telemetry",
+            "scene",
+            "solver",
+            "interrupt",
+        ],
+    ),
+    ("app", &["record", "replay", "telemetry", "scene", "solver"]),
+    (
+        "cli",
+        &[
+            "app",
+            "compare",
+            "sweep",
+            "record",
+            "replay",
+            "telemetry",
+            "scene",
+            "solver",
+            "interrupt",
+        ],
+    ),
+    ("interrupt", &[]),
+];
 
 /// Crates the solver must not use (as a path root, `name::…`).
 const FORBIDDEN_CRATES: [&str; 9] = [
@@ -21,39 +66,66 @@ const FORBIDDEN_CRATES: [&str; 9] = [
     "anyhow",
 ];
 
-/// weft's modules above the solver.
-const UPPER_MODULES: [&str; 6] = ["scene", "telemetry", "record", "replay", "app", "cli"];
+/// The window's crates: only `app` may use them.
+const WINDOW_CRATES: [&str; 5] = ["egui", "eframe", "egui_kittest", "winit", "wgpu"];
 
-/// One path that reaches above the solver.
+/// Whether `module` may use the crate `root` (a path's first segment that
+/// is neither `crate`, `super` nor `self`).
+fn crate_allowed(module: &str, root: &str) -> bool {
+    let window = WINDOW_CRATES.contains(&root) || (root.starts_with("re_") && root != "re_log");
+    match module {
+        "solver" => !FORBIDDEN_CRATES.contains(&root) && !root.starts_with("re_"),
+        "app" => true,
+        _ => !window,
+    }
+}
+
+/// Whether `module` may use weft's module `other`.
+fn module_allowed(module: &str, other: &str) -> bool {
+    other == module
+        || ALLOWED
+            .iter()
+            .find(|(m, _)| *m == module)
+            .is_some_and(|(_, allowed)| allowed.contains(&other))
+}
+
+/// One path that reaches where its module may not.
 #[derive(Debug, PartialEq)]
 struct Violation {
     line: usize,
     path: String,
 }
 
-/// The upward paths in one file's text; `depth` is how many modules below
-/// `solver` the file's module is, so how many `super`s stay inside it.
-fn violations(text: &str, depth: usize) -> Vec<Violation> {
+/// The paths in one file's text that `module` may not use; `depth` is how
+/// many modules below `module` the file's module is, so how many `super`s
+/// stay inside it.
+fn violations(text: &str, module: &str, depth: usize) -> Vec<Violation> {
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let code = line.split("//").next().unwrap_or_default();
         for path in paths_in(code) {
             let mut segments = path.split("::");
             let root = segments.next().unwrap_or_default();
-            let upward = if root == "crate" {
-                segments.next().is_some_and(|m| UPPER_MODULES.contains(&m))
-            } else if root == "super" {
-                // `super` repeated more times than the file is deep leaves the solver.
-                let supers = 1 + path
-                    .split("::")
-                    .skip(1)
-                    .take_while(|s| *s == "super")
-                    .count();
-                supers > depth
-            } else {
-                FORBIDDEN_CRATES.contains(&root) || root.starts_with("re_")
+            let ok = match root {
+                "crate" | "$crate" => segments.next().is_none_or(|m| module_allowed(module, m)),
+                "super" => {
+                    // `super` repeated more times than the file is deep
+                    // leaves the module, for the crate's root.
+                    let supers = 1 + path
+                        .split("::")
+                        .skip(1)
+                        .take_while(|s| *s == "super")
+                        .count();
+                    supers <= depth
+                        || path
+                            .split("::")
+                            .nth(supers)
+                            .is_none_or(|m| module_allowed(module, m))
+                }
+                "self" | "Self" => true,
+                _ => crate_allowed(module, root),
             };
-            if upward {
+            if !ok {
                 out.push(Violation { line: i + 1, path });
             }
         }
@@ -64,7 +136,7 @@ fn violations(text: &str, depth: usize) -> Vec<Violation> {
 /// Every `a::b::c` path in a line of code (identifiers joined by `::`).
 fn paths_in(code: &str) -> Vec<String> {
     let bytes = code.as_bytes();
-    let ident = |b: u8| b.is_ascii_alphanumeric() || b == b'_';
+    let ident = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'$';
     let mut out = Vec::new();
     let mut i = 0;
     while i < bytes.len() {
@@ -103,33 +175,64 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-#[test]
-fn the_solver_uses_nothing_above_it() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/solver");
+/// Every `.rs` file under `src/<module>/` (or `src/<module>.rs`), with how
+/// many modules below `module` each file's module is: `mod.rs` is the
+/// module itself (0), `x.rs` and `a/mod.rs` are 1, `a/x.rs` is 2.
+fn module_files(module: &str) -> Vec<(PathBuf, usize)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let file = src.join(format!("{module}.rs"));
+    if file.is_file() {
+        return vec![(file, 0)];
+    }
+    let root = src.join(module);
     let mut files = Vec::new();
     rust_files(&root, &mut files);
     files.sort();
-    assert!(files.len() >= 10, "found only {files:?}");
+    files
+        .into_iter()
+        .map(|f| {
+            let rel = f
+                .strip_prefix(&root)
+                .expect("under the module")
+                .to_path_buf();
+            let is_mod = rel.file_name().is_some_and(|n| n == "mod.rs");
+            let depth = rel.components().count() - usize::from(is_mod);
+            (f, depth)
+        })
+        .collect()
+}
+
+#[test]
+fn every_module_uses_only_the_layers_below_it() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    // Every module of the crate is in the table.
+    let mut modules: Vec<String> = std::fs::read_dir(&src)
+        .expect("src is readable")
+        .map(|e| e.expect("an entry").path())
+        .filter_map(|p| {
+            let name = p.file_stem()?.to_str()?.to_string();
+            (p.is_dir() || name != "lib" && name != "main").then_some(name)
+        })
+        .collect();
+    modules.sort();
+    let mut listed: Vec<String> = ALLOWED.iter().map(|(m, _)| m.to_string()).collect();
+    listed.sort();
+    assert_eq!(modules, listed, "ALLOWED must list every module of src/");
     let mut report = Vec::new();
-    for file in &files {
-        let rel = file.strip_prefix(&root).expect("under src/solver");
-        // How many modules below `solver` the file's module is: `mod.rs` is
-        // the solver itself (0), `x.rs` and `a/mod.rs` are 1, `a/x.rs` is 2.
-        let is_mod = rel.file_name().is_some_and(|n| n == "mod.rs");
-        let depth = rel.components().count() - usize::from(is_mod);
-        let text = std::fs::read_to_string(file).expect("a source file");
-        for v in violations(&text, depth) {
-            report.push(format!(
-                "src/solver/{}:{}: `{}`",
-                rel.display(),
-                v.line,
-                v.path
-            ));
+    for (module, _) in ALLOWED {
+        let files = module_files(module);
+        assert!(!files.is_empty(), "no source for {module}");
+        for (file, depth) in files {
+            let text = std::fs::read_to_string(&file).expect("a source file");
+            for v in violations(&text, module, depth) {
+                let rel = file.strip_prefix(&src).expect("under src");
+                report.push(format!("src/{}:{}: `{}`", rel.display(), v.line, v.path));
+            }
         }
     }
     assert!(
         report.is_empty(),
-        "the solver reaches above its layer:\n{}",
+        "modules reach where their layer may not:\n{}",
         report.join("\n")
     );
 }
@@ -147,7 +250,7 @@ let v = glam::Vec3::ZERO; // fine
 // use egui::Ui; in a comment: fine
 let c = re_viewer::App::new();
 ";
-    let found: Vec<(usize, String)> = violations(text, 2)
+    let found: Vec<(usize, String)> = violations(text, "solver", 2)
         .into_iter()
         .map(|v| (v.line, v.path))
         .collect();
@@ -161,6 +264,17 @@ let c = re_viewer::App::new();
             (8, "re_viewer::App::new".to_string()),
         ]
     );
-    // `super::super` from two modules deep stays inside the solver.
-    assert!(violations("use super::super::cloth::ClothSpec;", 2).is_empty());
+    // `super::super` from two modules deep stays inside the module.
+    assert!(violations("use super::super::cloth::ClothSpec;", "solver", 2).is_empty());
+    // A library below the command line may not use it, nor the window.
+    let compare =
+        "use crate::cli::output::out;\nuse crate::record::Figures;\nlet u = egui::Ui::new();";
+    let found: Vec<usize> = violations(compare, "compare", 1)
+        .into_iter()
+        .map(|v| v.line)
+        .collect();
+    assert_eq!(found, [1, 3]);
+    // The command line may use the libraries; the telemetry not the record.
+    assert!(violations("use crate::compare::read_all;", "cli", 1).is_empty());
+    assert_eq!(violations("$crate::record::Run", "telemetry", 0).len(), 1);
 }

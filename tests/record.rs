@@ -783,7 +783,10 @@ fn crossings_are_measured_and_drawn_with_self_collision_off() {
     let counts = &rec.scalars[paths::SELF_CROSSINGS];
     assert_eq!(counts.len(), frames as usize, "one count per frame");
     let most = counts.iter().map(|s| s.value).fold(0.0, f64::max);
-    assert!(most > 0.0, "the flag never crossed itself in {frames} frames");
+    assert!(
+        most > 0.0,
+        "the flag never crossed itself in {frames} frames"
+    );
     assert_eq!(figures.max_crossings as f64, most);
     let frames_crossing = counts.iter().filter(|s| s.value > 0.0).count() as u64;
     assert_eq!(figures.crossing_frames, frames_crossing);
@@ -804,7 +807,9 @@ fn a_bad_crossing_bound_is_refused_with_its_range() {
         ("expect.max_crossings=-1", "allowed"),
         ("expect.max_crossings=1.5", "whole number"),
     ] {
-        let err = load::load("windy_flag", &sets(&[set])).unwrap_err().to_string();
+        let err = load::load("windy_flag", &sets(&[set]))
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("expect.max_crossings"), "{set}: {err}");
         assert!(err.contains(says), "{set}: {err}");
     }

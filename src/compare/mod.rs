@@ -20,7 +20,6 @@
 //! [`report`] prints all this, [`recording`] writes the comparison `.rrd`,
 //! [`gate`] parses and checks `--fail-if` bounds.
 
-pub mod command;
 pub mod gate;
 pub mod recording;
 pub mod report;
@@ -228,9 +227,10 @@ fn rebuild_figures(rec: &read::Recording) -> Figures {
         failure,
         final_state: String::new(),
         max_crossings: max_of(paths::SELF_CROSSINGS) as u64,
-        crossing_frames: rec.scalars.get(paths::SELF_CROSSINGS).map_or(0, |s| {
-            s.iter().filter(|x| x.value > 0.0).count() as u64
-        }),
+        crossing_frames: rec
+            .scalars
+            .get(paths::SELF_CROSSINGS)
+            .map_or(0, |s| s.iter().filter(|x| x.value > 0.0).count() as u64),
         final_origin: None,
     }
 }

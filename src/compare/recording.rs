@@ -168,7 +168,7 @@ pub fn open(
             anyhow::anyhow!("cannot write the comparison to {}: {e}", path.display())
         });
     }
-    let url = connect.unwrap_or(crate::cli::DEFAULT_VIEWER);
+    let url = connect.unwrap_or(crate::telemetry::DEFAULT_VIEWER);
     let rec = builder
         .connect_grpc_opts(url.to_string())
         .map_err(|e| anyhow::anyhow!("cannot connect to a Rerun viewer at {url}: {e}"))?;

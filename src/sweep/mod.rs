@@ -24,7 +24,6 @@
 //! that ran them. [`collect`] reads a finished (or partial) sweep back.
 
 pub mod collect;
-pub mod command;
 pub mod grid;
 pub mod shard;
 

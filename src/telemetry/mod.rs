@@ -27,6 +27,9 @@
 //!
 //! Timelines: `frame` (sequence) and `sim_time` (seconds).
 
+/// Where `--connect` goes without a URL: a viewer started with `rerun`.
+pub const DEFAULT_VIEWER: &str = "rerun+http://127.0.0.1:9876/proxy";
+
 mod batch;
 pub mod blueprint;
 mod changes;

@@ -1,6 +1,7 @@
 //! The `weft` command line: list, check, show, record and replay presets;
-//! compare runs and sweep grids (their options live in `compare::command`
-//! and `sweep::command`).
+//! compare runs and sweep grids. Each subcommand's options and output live
+//! here (`compare.rs`, `sweep.rs`); the libraries below (`compare`,
+//! `sweep`, `record`, …) print nothing. Output goes through [`output`].
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -10,48 +11,13 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::record::{Run, table, verdict};
 use crate::scene::{Override, Scene, load, shipped};
-use crate::telemetry::{self, Telemetry, blueprint};
+use crate::telemetry::{self, DEFAULT_VIEWER, Telemetry, blueprint};
 
-/// Writes a command's output to standard output, like `print!` (and
-/// [`outln!`] like `println!`). A reader that went away
-/// (`weft presets | head`) ends the output, not the command: the rest is
-/// dropped, and the command still finishes its work and exits with its own
-/// code (a `weft compare --fail-if` gate still fails). Any other failure to
-/// write ends the process with `error: …` and code 2.
-macro_rules! out {
-    ($($arg:tt)*) => {
-        $crate::cli::write_out(format_args!($($arg)*))
-    };
-}
-pub(crate) use out;
+mod compare;
+pub mod output;
+mod sweep;
 
-/// [`out!`] with a newline, like `println!`.
-macro_rules! outln {
-    ($($arg:tt)*) => {
-        $crate::cli::write_out(format_args!("{}\n", format_args!($($arg)*)))
-    };
-}
-pub(crate) use outln;
-
-/// [`out!`]'s writer.
-pub(crate) fn write_out(args: std::fmt::Arguments) {
-    use std::io::Write;
-    use std::sync::atomic::{AtomicBool, Ordering};
-    /// Set once the reader has gone away.
-    static GONE: AtomicBool = AtomicBool::new(false);
-    if GONE.load(Ordering::Relaxed) {
-        return;
-    }
-    let mut stdout = std::io::stdout().lock();
-    match stdout.write_fmt(args).and_then(|()| stdout.flush()) {
-        Ok(()) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => GONE.store(true, Ordering::Relaxed),
-        Err(e) => {
-            eprintln!("error: writing to standard output: {e}");
-            std::process::exit(2);
-        }
-    }
-}
+use output::{out, outln};
 
 /// weft: oriented-particle cloth simulator and live-telemetry debugger.
 #[derive(Debug, Parser)]
@@ -94,9 +60,9 @@ pub enum Command {
         file: PathBuf,
     },
     /// Compare recorded runs side by side, write a comparison for the viewer, gate on regressions.
-    Compare(crate::compare::command::CompareArgs),
+    Compare(compare::CompareArgs),
     /// Run a preset over a grid of settings (resumable, sharded on clusters), or collect one.
-    Sweep(crate::sweep::command::SweepArgs),
+    Sweep(sweep::SweepArgs),
 }
 
 /// Options of `weft gui`.
@@ -156,9 +122,6 @@ pub struct RecordArgs {
     #[arg(long, short = 'o', group = "sink")]
     pub stdout: bool,
 }
-
-/// Where `--connect` goes without a URL: a viewer started with `rerun`.
-pub const DEFAULT_VIEWER: &str = "rerun+http://127.0.0.1:9876/proxy";
 
 impl RecordArgs {
     /// The `--set` overrides, with the telemetry shortcuts appended.
@@ -237,8 +200,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Record(args) => record(args),
-        Command::Compare(args) => crate::compare::command::compare(args),
-        Command::Sweep(args) => crate::sweep::command::sweep(args),
+        Command::Compare(args) => compare::compare(args),
+        Command::Sweep(args) => sweep::sweep(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
             if r.truncated {

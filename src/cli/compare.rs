@@ -6,10 +6,10 @@ use std::process::ExitCode;
 use clap::Args;
 use glam::Vec3;
 
-use super::gate::{self, Bound};
-use super::recording::{self, Placement};
-use super::{RunData, incomparable, read_all, report};
-use crate::cli::{out, outln};
+use super::output::{out, outln};
+use crate::compare::gate::{self, Bound};
+use crate::compare::recording::{self, Placement};
+use crate::compare::{RunData, incomparable, read_all, report};
 
 /// Options of `weft compare`.
 #[derive(Debug, Args)]
@@ -35,7 +35,7 @@ pub struct CompareArgs {
     #[arg(long, value_name = "FILE.rrd", group = "sink")]
     pub save: Option<PathBuf>,
     /// Stream the comparison to a running Rerun viewer.
-    #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = crate::cli::DEFAULT_VIEWER, group = "sink")]
+    #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = crate::telemetry::DEFAULT_VIEWER, group = "sink")]
     pub connect: Option<String>,
     /// Draw the cloths on top of each other instead of side by side.
     #[arg(long)]

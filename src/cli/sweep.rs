@@ -8,12 +8,12 @@ use std::sync::atomic::Ordering;
 use anyhow::bail;
 use clap::Args;
 
-use super::collect::{self, Format};
-use super::grid::Axis;
-use super::shard::{self, Shard};
-use super::{MAX_POINTS, MAX_SECONDS, Plan, Progress};
-use crate::cli::out;
+use super::output::out;
 use crate::compare::{read_all, recording, report};
+use crate::sweep::collect::{self, Format};
+use crate::sweep::grid::Axis;
+use crate::sweep::shard::{self, Shard};
+use crate::sweep::{MAX_POINTS, MAX_SECONDS, Plan, Progress};
 
 /// Options of `weft sweep`.
 #[derive(Debug, Args)]
@@ -144,7 +144,7 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
     );
     bar.set_message(preset.clone());
     let where_ = shard.map(|s| format!(", shard {s}")).unwrap_or_default();
-    let outcome = super::run(&plan, out, shard, jobs, &stop, |p| match p {
+    let outcome = crate::sweep::run(&plan, out, shard, jobs, &stop, |p| match p {
         Progress::Start { total, skipped } => {
             bar.set_length(total as u64);
             bar.set_position(skipped as u64);
