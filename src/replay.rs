@@ -61,17 +61,50 @@ pub(crate) fn stored_tuning(text: &str) -> Result<Tuning, toml::de::Error> {
     Ok(tuning)
 }
 
+/// Why a recording could not be replayed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] read::ReadError),
+    /// It holds no stored preset.
+    #[error("{}: no preset stored (not a weft recording?)", path.display())]
+    NoPreset {
+        /// The file.
+        path: std::path::PathBuf,
+    },
+    /// The stored preset does not load (with the error's place in it).
+    #[error(transparent)]
+    Preset(#[from] crate::scene::PresetError),
+    /// The stored preset's scene cannot be built.
+    #[error(transparent)]
+    Setup(#[from] crate::solver::SetupError),
+    /// Stored parameters that do not read or do not apply.
+    #[error("stored parameters at frame {frame}: {detail}")]
+    Parameters {
+        /// The frame they took effect at.
+        frame: i64,
+        /// What was wrong.
+        detail: String,
+    },
+    /// The solver failed while replaying.
+    #[error("replay failed at frame {frame}: {source}")]
+    Step {
+        /// The frame that failed.
+        frame: u64,
+        /// The failure.
+        source: crate::solver::StepError,
+    },
+}
+
 /// Re-runs the recording at `path`.
-pub fn replay(path: &Path) -> Result<Replayed, String> {
+pub fn replay(path: &Path) -> Result<Replayed, ReplayError> {
     let rec = read::read(path)?;
-    let text = rec.preset.ok_or_else(|| {
-        format!(
-            "{}: no preset stored (not a weft recording?)",
-            path.display()
-        )
-    })?;
+    let text = rec
+        .preset
+        .ok_or_else(|| ReplayError::NoPreset { path: path.into() })?;
     let label = format!("preset stored in {}", path.display());
-    let preset = load::parse(&label, &text).map_err(|e| e.to_string())?;
+    let preset = load::parse(&label, &text)?;
     let summary: Option<toml::Table> = rec.summary.as_deref().and_then(|s| s.parse().ok());
     let recorded_frames = summary
         .as_ref()
@@ -88,16 +121,19 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
 
     let mut changes: Vec<(u64, Tuning)> = Vec::new();
     for (frame, text) in &rec.params {
-        let tuning =
-            stored_tuning(text).map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
+        let tuning = stored_tuning(text).map_err(|e| ReplayError::Parameters {
+            frame: *frame,
+            detail: e.to_string(),
+        })?;
         changes.push((*frame as u64, tuning));
     }
-    let mut scene = Scene::new(&preset).map_err(|e| e.to_string())?;
-    let apply = |scene: &mut Scene, frame: u64| -> Result<(), String> {
+    let mut scene = Scene::new(&preset)?;
+    let apply = |scene: &mut Scene, frame: u64| -> Result<(), ReplayError> {
         for (_, p) in changes.iter().filter(|(f, _)| *f == frame) {
-            scene
-                .set_tuning(p)
-                .map_err(|e| format!("stored parameters at frame {frame}: {e}"))?;
+            scene.set_tuning(p).map_err(|e| ReplayError::Parameters {
+                frame: frame as i64,
+                detail: e.to_string(),
+            })?;
         }
         Ok(())
     };
@@ -107,7 +143,7 @@ pub fn replay(path: &Path) -> Result<Replayed, String> {
         apply(&mut scene, frame)?;
         scene
             .step()
-            .map_err(|e| format!("replay failed at frame {frame}: {e}"))?;
+            .map_err(|source| ReplayError::Step { frame, source })?;
         if let Some((f, recorded)) = &rec.last_positions
             && *f as u64 == frame
         {

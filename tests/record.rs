@@ -715,7 +715,7 @@ fn each_recording_in_a_file_is_read_on_its_own() {
     assert_eq!(all[1].params, two.params);
     assert_eq!(all[1].last_positions, two.last_positions);
     let e = read::read(&both).unwrap_err();
-    assert!(e.contains("holds 2 recordings"), "{e}");
+    assert!(e.to_string().contains("holds 2 recordings"), "{e}");
 
     // A file cut short says so, and keeps what it holds.
     let cut = dir.path().join("cut.rrd");

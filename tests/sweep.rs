@@ -148,7 +148,7 @@ fn bad_lists_and_ranges_are_refused_with_their_reason() {
         ("solver.iterations=1,1", "listed twice"),
         ("solver.iterations", "not of the form"),
     ] {
-        let e = arg.parse::<Axis>().unwrap_err();
+        let e = arg.parse::<Axis>().unwrap_err().to_string();
         assert!(e.contains(says), "{arg}: {e}");
     }
 }
@@ -165,7 +165,7 @@ fn shards_parse_check_and_come_from_slurm_or_kubernetes() {
         ("2", "expected I/N"),
         ("a/2", "not a whole number"),
     ] {
-        let e = s.parse::<Shard>().unwrap_err();
+        let e = s.parse::<Shard>().unwrap_err().to_string();
         assert!(e.contains(says), "{s}: {e}");
     }
     let env = |pairs: &'static [(&'static str, &'static str)]| {
@@ -215,16 +215,19 @@ fn shards_parse_check_and_come_from_slurm_or_kubernetes() {
     assert!(
         shard::resolve(None, None, k8s)
             .unwrap_err()
+            .to_string()
             .contains("--shards N")
     );
     assert!(
         shard::resolve(None, Some(2), k8s)
             .unwrap_err()
+            .to_string()
             .contains("does not exist")
     );
     assert!(
         shard::resolve(None, Some(2), env(&[]))
             .unwrap_err()
+            .to_string()
             .contains("--shard I/2")
     );
 }

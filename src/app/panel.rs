@@ -649,7 +649,7 @@ impl Panel {
     fn apply_set(&mut self, session: &Session, status: &Status) {
         let o: Override = match self.set_text.parse() {
             Ok(o) => o,
-            Err(e) => return self.say(false, e),
+            Err(e) => return self.say(false, e.to_string()),
         };
         let Some(current) = &status.preset else {
             return;

@@ -51,7 +51,7 @@ pub struct CompareArgs {
 
 /// Runs `weft compare`.
 pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
-    let runs = read_all(&args.files).map_err(anyhow::Error::msg)?;
+    let runs = read_all(&args.files)?;
     let text = report::report(&runs);
     out!("{text}");
 

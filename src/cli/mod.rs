@@ -203,7 +203,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
         Command::Replay { file } => {
-            let r = crate::replay::replay(&file).map_err(anyhow::Error::msg)?;
+            let r = crate::replay::replay(&file)?;
             if r.truncated {
                 outln!(
                     "{}: the file is cut short; compared what it holds",

@@ -102,16 +102,14 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
     let (Some(preset), Some(out)) = (&args.preset, &args.out) else {
         bail!("a sweep needs a preset and --out DIR");
     };
-    let shard = shard::resolve(args.shard, args.shards, |k| std::env::var(k).ok())
-        .map_err(anyhow::Error::msg)?;
+    let shard = shard::resolve(args.shard, args.shards, |k| std::env::var(k).ok())?;
     let plan = Plan::new(
         preset,
         args.set.clone(),
         args.frames,
         args.seconds,
         &args.level,
-    )
-    .map_err(anyhow::Error::msg)?;
+    )?;
     let jobs = args
         .jobs
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -170,8 +168,7 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
             });
         }
         Progress::Error(e) => bar.suspend(|| eprintln!("  error: {e}")),
-    })
-    .map_err(anyhow::Error::msg)?;
+    })?;
     bar.finish_and_clear();
     eprintln!(
         "{} run, {} already done{}{}; collect with `weft sweep --collect {}`",
@@ -211,8 +208,8 @@ fn duration(secs: f64) -> String {
 }
 
 fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
-    let mut c = collect::read(dir).map_err(anyhow::Error::msg)?;
-    collect::sort(&mut c.points, &args.sort, args.desc).map_err(anyhow::Error::msg)?;
+    let mut c = collect::read(dir)?;
+    collect::sort(&mut c.points, &args.sort, args.desc)?;
     let format = if args.csv {
         Format::Csv
     } else if args.json {
@@ -239,7 +236,7 @@ fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
         .collect();
     if !best.is_empty() {
         let path = args.save.clone().unwrap_or_else(|| dir.join("best.rrd"));
-        let runs = read_all(&best).map_err(anyhow::Error::msg)?;
+        let runs = read_all(&best)?;
         let text = report::report(&runs);
         let rec = recording::open(&runs, Some(&path), None)?;
         recording::write(&rec, &runs, recording::Placement::SideBySide(None), &text)?;

@@ -75,64 +75,107 @@ impl fmt::Display for Bound {
     }
 }
 
-fn number(s: &str, whole: &str) -> Result<f64, String> {
+/// How a bound is written.
+const SYNTAX: &str = "expected FIGURE OP LIMIT, e.g. `max_strain > 1.1*A` (OP: > >= < <=; LIMIT: a number, or A, k*A, A+k, k*A-k)";
+
+/// A `--fail-if` bound that does not parse.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("--fail-if `{text}`: {problem}")]
+pub struct BoundError {
+    /// The bound, as written.
+    pub text: String,
+    /// What is wrong with it.
+    pub problem: BoundProblem,
+}
+
+/// What is wrong with a `--fail-if` bound.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BoundProblem {
+    /// No `>`, `>=`, `<` or `<=`.
+    #[error("no comparison; {SYNTAX}")]
+    NoComparison,
+    /// The figure is not one weft measures.
+    #[error("unknown figure `{name}`{}; figures: {}", hint.as_ref().map(|n| format!(" (did you mean `{n}`?)")).unwrap_or_default(), figure_names().join(", "))]
+    UnknownFigure {
+        /// The name given.
+        name: String,
+        /// The nearest figure's name.
+        hint: Option<String>,
+    },
+    /// Nothing after the comparison.
+    #[error("no limit; {SYNTAX}")]
+    NoLimit,
+    /// A part that should be a number is not.
+    #[error("`{0}` is not a number")]
+    NotANumber(String),
+    /// A factor not written as `k*A`.
+    #[error("write the factor as `k*A`; {SYNTAX}")]
+    Factor,
+    /// Something after the limit.
+    #[error("unexpected `{0}`; {SYNTAX}")]
+    Unexpected(String),
+}
+
+fn number(s: &str) -> Result<f64, BoundProblem> {
     s.trim()
         .parse::<f64>()
         .ok()
         .filter(|v| v.is_finite())
-        .ok_or_else(|| format!("--fail-if `{whole}`: `{s}` is not a number"))
+        .ok_or_else(|| BoundProblem::NotANumber(s.to_string()))
 }
 
 impl FromStr for Bound {
-    type Err = String;
+    type Err = BoundError;
 
-    fn from_str(text: &str) -> Result<Self, String> {
-        let syntax = "expected FIGURE OP LIMIT, e.g. `max_strain > 1.1*A` (OP: > >= < <=; LIMIT: a number, or A, k*A, A+k, k*A-k)";
+    fn from_str(text: &str) -> Result<Self, BoundError> {
+        Self::parse(text).map_err(|problem| BoundError {
+            text: text.to_string(),
+            problem,
+        })
+    }
+}
+
+impl Bound {
+    fn parse(text: &str) -> Result<Self, BoundProblem> {
         let (i, op, len) = [(">=", Op::Ge), ("<=", Op::Le), (">", Op::Gt), ("<", Op::Lt)]
             .iter()
             .find_map(|(s, op)| text.find(s).map(|i| (i, *op, s.len())))
-            .ok_or_else(|| format!("--fail-if `{text}`: no comparison; {syntax}"))?;
+            .ok_or(BoundProblem::NoComparison)?;
         let name = text[..i].trim();
         let rhs: String = text[i + len..]
             .chars()
             .filter(|c| !c.is_whitespace())
             .collect();
         if !figure_names().iter().any(|n| n == name) {
-            let hint = crate::scene::load::nearest(name, figure_names().iter().map(|s| s.as_str()))
-                .map(|n| format!(" (did you mean `{n}`?)"))
-                .unwrap_or_default();
-            return Err(format!(
-                "--fail-if `{text}`: unknown figure `{name}`{hint}; figures: {}",
-                figure_names().join(", ")
-            ));
+            let names = figure_names();
+            let hint = crate::scene::load::nearest(name, names.iter().map(|s| s.as_str()));
+            return Err(BoundProblem::UnknownFigure {
+                name: name.to_string(),
+                hint: hint.map(str::to_string),
+            });
         }
         if rhs.is_empty() {
-            return Err(format!("--fail-if `{text}`: no limit; {syntax}"));
+            return Err(BoundProblem::NoLimit);
         }
         let limit = match rhs.find('A') {
-            None => Limit::Absolute(number(&rhs, text)?),
+            None => Limit::Absolute(number(&rhs)?),
             Some(a) => {
                 let before = &rhs[..a];
                 let after = &rhs[a + 1..];
                 let mut scale = match before {
                     "" => 1.0,
-                    b => number(
-                        b.strip_suffix('*').ok_or_else(|| {
-                            format!("--fail-if `{text}`: write the factor as `k*A`; {syntax}")
-                        })?,
-                        text,
-                    )?,
+                    b => number(b.strip_suffix('*').ok_or(BoundProblem::Factor)?)?,
                 };
                 let mut rest = after;
                 if let Some(r) = rest.strip_prefix('*') {
                     let end = r.find(['+', '-']).filter(|i| *i > 0).unwrap_or(r.len());
-                    scale *= number(&r[..end], text)?;
+                    scale *= number(&r[..end])?;
                     rest = &r[end..];
                 }
                 let offset = match rest {
                     "" => 0.0,
-                    r if r.starts_with('+') || r.starts_with('-') => number(r, text)?,
-                    r => return Err(format!("--fail-if `{text}`: unexpected `{r}`; {syntax}")),
+                    r if r.starts_with('+') || r.starts_with('-') => number(r)?,
+                    r => return Err(BoundProblem::Unexpected(r.to_string())),
                 };
                 Limit::Relative { scale, offset }
             }

@@ -57,20 +57,49 @@ pub struct RunData {
     pub changes: Vec<(i64, String)>,
 }
 
+/// Why a recording could not be compared.
+#[derive(Debug, thiserror::Error)]
+pub enum CompareError {
+    /// The file could not be read.
+    #[error(transparent)]
+    Read(#[from] read::ReadError),
+    /// It holds no stored preset.
+    #[error("{}: not a weft recording, or cut short before its preset was written (it holds no stored preset; weft record, weft sweep and the debugger's session files do)", path.display())]
+    NoPreset {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Its stored preset is not TOML.
+    #[error("{}: the stored preset is not TOML: {source}", path.display())]
+    Preset {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said.
+        source: toml::de::Error,
+    },
+    /// Its stored summary does not read as figures.
+    #[error("{}: the stored summary is unreadable: {source}", path.display())]
+    Summary {
+        /// The file.
+        path: PathBuf,
+        /// What the parser said.
+        source: toml::de::Error,
+    },
+}
+
 impl RunData {
     /// Reads `path`. Fails on a file that is not a Rerun recording or holds no
     /// weft preset.
-    pub fn read(path: &Path) -> Result<Self, String> {
+    pub fn read(path: &Path) -> Result<Self, CompareError> {
         let rec = read::read(path)?;
-        let text = rec.preset.clone().ok_or_else(|| {
-            format!(
-                "{}: not a weft recording, or cut short before its preset was written (it holds no stored preset; weft record, weft sweep and the debugger's session files do)",
-                path.display()
-            )
+        let text = rec
+            .preset
+            .clone()
+            .ok_or_else(|| CompareError::NoPreset { path: path.into() })?;
+        let table: toml::Table = text.parse().map_err(|source| CompareError::Preset {
+            path: path.into(),
+            source,
         })?;
-        let table: toml::Table = text
-            .parse()
-            .map_err(|e| format!("{}: the stored preset is not TOML: {e}", path.display()))?;
         let preset = load::parse(&format!("preset stored in {}", path.display()), &text).ok();
         let full = preset
             .as_ref()
@@ -83,11 +112,11 @@ impl RunData {
         let finished = summary.is_some();
         let figures = match summary.map(toml::from_str::<Figures>) {
             Some(Ok(f)) => f,
-            Some(Err(e)) => {
-                return Err(format!(
-                    "{}: the stored summary is unreadable: {e}",
-                    path.display()
-                ));
+            Some(Err(source)) => {
+                return Err(CompareError::Summary {
+                    path: path.into(),
+                    source,
+                });
             }
             None => rebuild_figures(&rec),
         };
@@ -159,7 +188,7 @@ impl RunData {
 }
 
 /// Reads every input and makes the names unique (`name`, `name#2`, …).
-pub fn read_all(paths: &[PathBuf]) -> Result<Vec<RunData>, String> {
+pub fn read_all(paths: &[PathBuf]) -> Result<Vec<RunData>, CompareError> {
     let mut runs = paths
         .iter()
         .map(|p| RunData::read(p))

@@ -31,16 +31,55 @@ pub enum Format {
     Markdown,
 }
 
+/// Why a sweep's results could not be read or sorted.
+#[derive(Debug, thiserror::Error)]
+pub enum CollectError {
+    /// A file or the directory could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The manifest does not parse.
+    #[error("{}: {source}", path.display())]
+    Manifest {
+        /// The manifest.
+        path: PathBuf,
+        /// What the parser said.
+        source: serde_json::Error,
+    },
+    /// Neither a manifest nor a finished point.
+    #[error("{}: no weft sweep here (no {MANIFEST} and no finished point)", .0.display())]
+    NoSweep(PathBuf),
+    /// `--sort` by something that is neither a figure nor a swept key.
+    #[error("--sort {key}: not a figure or a swept key; figures: {}; swept: {}", figure_names().join(", "), swept.join(", "))]
+    SortKey {
+        /// The key given.
+        key: String,
+        /// The swept keys.
+        swept: Vec<String>,
+    },
+}
+
 /// Reads every finished point in `dir`.
-pub fn read(dir: &Path) -> Result<Collected, String> {
-    let entries = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let manifest = match std::fs::read_to_string(dir.join(MANIFEST)) {
-        Ok(t) => Some(
-            serde_json::from_str::<Manifest>(&t)
-                .map_err(|e| format!("{}: {e}", dir.join(MANIFEST).display()))?,
-        ),
-        Err(_) => None,
+pub fn read(dir: &Path) -> Result<Collected, CollectError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| CollectError::Io { path, source }
     };
+    let entries = std::fs::read_dir(dir).map_err(io(dir))?;
+    let manifest =
+        match std::fs::read_to_string(dir.join(MANIFEST)) {
+            Ok(t) => Some(serde_json::from_str::<Manifest>(&t).map_err(|source| {
+                CollectError::Manifest {
+                    path: dir.join(MANIFEST),
+                    source,
+                }
+            })?),
+            Err(_) => None,
+        };
     let mut points = Vec::new();
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -51,7 +90,7 @@ pub fn read(dir: &Path) -> Result<Collected, String> {
         .collect();
     files.sort();
     for f in files {
-        let text = std::fs::read_to_string(&f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let text = std::fs::read_to_string(&f).map_err(io(&f))?;
         let Ok(p) = serde_json::from_str::<PointResult>(&text) else {
             continue;
         };
@@ -60,10 +99,7 @@ pub fn read(dir: &Path) -> Result<Collected, String> {
         }
     }
     if points.is_empty() && manifest.is_none() {
-        return Err(format!(
-            "{}: no weft sweep here (no {MANIFEST} and no finished point)",
-            dir.display()
-        ));
+        return Err(CollectError::NoSweep(dir.into()));
     }
     let missing = manifest
         .iter()
@@ -80,7 +116,7 @@ pub fn read(dir: &Path) -> Result<Collected, String> {
 
 /// The keys `--sort` accepts besides the figures: `index`, `name`, and each
 /// swept key (full or its last segment).
-fn sort_value(p: &PointResult, key: &str) -> Result<SortKey, String> {
+fn sort_value(p: &PointResult, key: &str) -> Result<SortKey, CollectError> {
     if key == "index" {
         return Ok(SortKey::Number(p.index as f64));
     }
@@ -105,15 +141,10 @@ fn sort_value(p: &PointResult, key: &str) -> Result<SortKey, String> {
             Ok(x) => SortKey::Number(x),
             Err(_) => SortKey::Text(v.clone()),
         }),
-        None => Err(format!(
-            "--sort {key}: not a figure or a swept key; figures: {}; swept: {}",
-            figure_names().join(", "),
-            p.settings
-                .iter()
-                .map(|(k, _)| k.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
+        None => Err(CollectError::SortKey {
+            key: key.to_string(),
+            swept: p.settings.iter().map(|(k, _)| k.clone()).collect(),
+        }),
     }
 }
 
@@ -124,7 +155,7 @@ enum SortKey {
 }
 
 /// Sorts the points by `key`, ascending (or descending), ties by index.
-pub fn sort(points: &mut [PointResult], key: &str, descending: bool) -> Result<(), String> {
+pub fn sort(points: &mut [PointResult], key: &str, descending: bool) -> Result<(), CollectError> {
     let mut keyed = Vec::new();
     for p in points.iter() {
         keyed.push((sort_value(p, key)?, p.index));

@@ -8,7 +8,7 @@
 
 use std::str::FromStr;
 
-use crate::scene::Override;
+use crate::scene::load::{Override, OverrideError};
 
 /// One `--set` of a sweep: a key and the values it takes.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,15 +52,49 @@ fn float_text(v: f64) -> String {
     }
 }
 
+/// A `--set` axis of a sweep that does not parse.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum AxisError {
+    /// No `=`.
+    #[error("`{0}` is not of the form key.path=V1,V2,… or key.path=A..B:N")]
+    NoValues(String),
+    /// `a,,b`.
+    #[error("`{0}`: an empty value in the list")]
+    EmptyValue(String),
+    /// A range `A..B:N` written wrong.
+    #[error("range `{range}`: {problem}; write A..B:N, e.g. 0.05..0.4:8")]
+    Range {
+        /// The range as written.
+        range: String,
+        /// What is wrong with it.
+        problem: &'static str,
+    },
+    /// A value that does not make an override.
+    #[error(transparent)]
+    Override(#[from] OverrideError),
+    /// A value listed twice.
+    #[error("`{axis}`: the value `{value}` is listed twice")]
+    Twice {
+        /// The axis as written.
+        axis: String,
+        /// The value.
+        value: String,
+    },
+    /// A key swept by two axes.
+    #[error("--set {0}: the key is swept twice")]
+    KeyTwice(String),
+}
+
 /// Expands `A..B:N` into `N` evenly spaced values from `A` to `B` inclusive
 /// (integers when `A`, `B` and the step are).
-fn range(text: &str) -> Option<Result<Vec<String>, String>> {
+fn range(text: &str) -> Option<Result<Vec<String>, AxisError>> {
     let (span, count) = text.rsplit_once(':').unwrap_or((text, ""));
     let (a, b) = span.split_once("..")?;
-    let bad = |what: &str| {
-        Some(Err(format!(
-            "range `{text}`: {what}; write A..B:N, e.g. 0.05..0.4:8"
-        )))
+    let bad = |problem: &'static str| {
+        Some(Err(AxisError::Range {
+            range: text.to_string(),
+            problem,
+        }))
     };
     let (Ok(x), Ok(y)) = (a.trim().parse::<f64>(), b.trim().parse::<f64>()) else {
         return bad("its ends must be numbers");
@@ -93,17 +127,17 @@ fn range(text: &str) -> Option<Result<Vec<String>, String>> {
 }
 
 impl FromStr for Axis {
-    type Err = String;
+    type Err = AxisError;
 
-    fn from_str(s: &str) -> Result<Self, String> {
-        let (key, raw) = s.split_once('=').ok_or_else(|| {
-            format!("`{s}` is not of the form key.path=V1,V2,… or key.path=A..B:N")
-        })?;
+    fn from_str(s: &str) -> Result<Self, AxisError> {
+        let (key, raw) = s
+            .split_once('=')
+            .ok_or_else(|| AxisError::NoValues(s.to_string()))?;
         let key = key.trim();
         let mut texts = Vec::new();
         for v in split_values(raw) {
             if v.is_empty() {
-                return Err(format!("`{s}`: an empty value in the list"));
+                return Err(AxisError::EmptyValue(s.to_string()));
             }
             match range(&v) {
                 Some(r) => texts.extend(r?),
@@ -116,7 +150,10 @@ impl FromStr for Axis {
         }
         for (i, t) in texts.iter().enumerate() {
             if texts[..i].contains(t) {
-                return Err(format!("`{s}`: the value `{t}` is listed twice"));
+                return Err(AxisError::Twice {
+                    axis: s.to_string(),
+                    value: t.clone(),
+                });
             }
         }
         Ok(Self {
@@ -163,10 +200,10 @@ fn safe(text: &str) -> String {
 }
 
 /// Checks the axes together: each key once.
-pub fn check(axes: &[Axis]) -> Result<(), String> {
+pub fn check(axes: &[Axis]) -> Result<(), AxisError> {
     for (i, a) in axes.iter().enumerate() {
         if axes[..i].iter().any(|b| b.key == a.key) {
-            return Err(format!("--set {}: the key is swept twice", a.key));
+            return Err(AxisError::KeyTwice(a.key.clone()));
         }
     }
     Ok(())

@@ -142,14 +142,12 @@ impl Plan {
         frames: Option<u64>,
         seconds: Option<f32>,
         level: &str,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SweepError> {
         grid::check(&axes)?;
         if let Some(s) = seconds
             && !(s.is_finite() && s > 0.0)
         {
-            return Err(format!(
-                "--seconds {s}: expected a positive number of seconds"
-            ));
+            return Err(SweepError::Seconds(s));
         }
         let level_set = Override {
             key: "telemetry.level".into(),
@@ -159,14 +157,18 @@ impl Plan {
         for p in grid::points(&axes) {
             let mut sets = p.overrides.clone();
             sets.push(level_set.clone());
-            let loaded = load::load(preset, &sets).map_err(|e| {
+            let loaded = load::load(preset, &sets).map_err(|source| {
                 let at = p
                     .settings
                     .iter()
                     .map(|(k, v)| format!("{k}={v}"))
                     .collect::<Vec<_>>()
                     .join(", ");
-                format!("{e}\n  (at point {} of the sweep: {at})", p.index)
+                SweepError::Point {
+                    index: p.index,
+                    at,
+                    source: Box::new(source),
+                }
             })?;
             points.push((p, loaded));
         }
@@ -264,10 +266,94 @@ pub const SAMPLES: usize = 6;
 
 /// Writes `bytes` to `path` through `path.part` and a rename, so `path`
 /// exists only complete.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
     let part = part_path(path);
-    std::fs::write(&part, bytes).map_err(|e| format!("writing {}: {e}", part.display()))?;
-    std::fs::rename(&part, path).map_err(|e| format!("renaming {} into place: {e}", part.display()))
+    std::fs::write(&part, bytes).map_err(file("writing", &part))?;
+    std::fs::rename(&part, path).map_err(file("renaming into place", &part))
+}
+
+/// Why a sweep could not be planned, run or written.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// A `--set` axis that does not parse.
+    #[error(transparent)]
+    Axis(#[from] grid::AxisError),
+    /// `--seconds` not a positive number.
+    #[error("--seconds {0}: expected a positive number of seconds")]
+    Seconds(f32),
+    /// A point of the grid whose preset does not load.
+    #[error("{source}\n  (at point {index} of the sweep: {at})")]
+    Point {
+        /// The point's index.
+        index: usize,
+        /// Its settings, `key=value, …`.
+        at: String,
+        /// Why its preset does not load.
+        source: Box<crate::scene::PresetError>,
+    },
+    /// A file or directory that could not be written.
+    #[error("{action} {}: {source}", path.display())]
+    File {
+        /// What was being done (`writing`, `cannot create`, …).
+        action: &'static str,
+        /// The file or directory.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// A manifest that is not a sweep's.
+    #[error("{}: not a weft sweep manifest ({source}); use another --out", path.display())]
+    Manifest {
+        /// The manifest.
+        path: PathBuf,
+        /// What the parser said.
+        source: serde_json::Error,
+    },
+    /// The output directory holds another sweep.
+    #[error("{} holds another sweep ({what}); its points are kept: use another --out, or delete it to start over", dir.display())]
+    Another {
+        /// The directory.
+        dir: PathBuf,
+        /// How the sweeps differ.
+        what: String,
+    },
+    /// A point's scene could not be built.
+    #[error("{point}: {source}")]
+    Setup {
+        /// The point's name.
+        point: String,
+        /// Why.
+        source: Box<crate::solver::SetupError>,
+    },
+    /// A point's run could not be logged or finished.
+    #[error("{point}: {source}")]
+    Run {
+        /// The point's name.
+        point: String,
+        /// Why.
+        source: Box<crate::record::RunError>,
+    },
+    /// A point's recording could not be started.
+    #[error("cannot write {}: {source}", path.display())]
+    Recording {
+        /// The file.
+        path: PathBuf,
+        /// What Rerun said.
+        source: rerun::RecordingStreamError,
+    },
+    /// Rerun's batching could not be set up.
+    #[error(transparent)]
+    Batching(#[from] rerun::log::ChunkBatcherError),
+}
+
+/// A [`SweepError::File`] for `action` on `path`, from the system's error.
+fn file(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> SweepError {
+    let path = path.to_path_buf();
+    move |source| SweepError::File {
+        action,
+        path,
+        source,
+    }
 }
 
 /// `NAME.rrd` → `NAME.rrd.part`.
@@ -279,18 +365,17 @@ pub fn part_path(path: &Path) -> PathBuf {
 
 /// Creates `dir` and writes the manifest, or checks that the one there is
 /// this sweep's. Nothing in `dir` is removed or overwritten otherwise.
-pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), SweepError> {
+    std::fs::create_dir_all(dir).map_err(file("cannot create", dir))?;
     let path = dir.join(MANIFEST);
     let json = serde_json::to_string_pretty(manifest).expect("manifest serializes");
     match std::fs::read_to_string(&path) {
         Ok(old) => {
-            let old: Manifest = serde_json::from_str(&old).map_err(|e| {
-                format!(
-                    "{}: not a weft sweep manifest ({e}); use another --out",
-                    path.display()
-                )
-            })?;
+            let old: Manifest =
+                serde_json::from_str(&old).map_err(|source| SweepError::Manifest {
+                    path: path.clone(),
+                    source,
+                })?;
             if old != *manifest {
                 let what = if old.weft != manifest.weft {
                     format!(
@@ -304,10 +389,10 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
                 } else {
                     "other frames, seconds or level".to_string()
                 };
-                return Err(format!(
-                    "{} holds another sweep ({what}); its points are kept: use another --out, or delete it to start over",
-                    dir.display()
-                ));
+                return Err(SweepError::Another {
+                    dir: dir.into(),
+                    what,
+                });
             }
             Ok(())
         }
@@ -315,9 +400,8 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), String> {
             // Several shards may start at once: each writes through its own
             // temporary name, and the renames all put the same bytes in place.
             let tmp = dir.join(format!(".{MANIFEST}.{}", std::process::id()));
-            std::fs::write(&tmp, &json)
-                .map_err(|e| format!("cannot write in {}: {e}", dir.display()))?;
-            std::fs::rename(&tmp, &path).map_err(|e| format!("writing {}: {e}", path.display()))
+            std::fs::write(&tmp, &json).map_err(file("cannot write in", dir))?;
+            std::fs::rename(&tmp, &path).map_err(file("writing", &path))
         }
     }
 }
@@ -339,30 +423,39 @@ pub fn run_point(
     point: &Point,
     loaded: &Loaded,
     dir: &Path,
-) -> Result<PointResult, String> {
+) -> Result<PointResult, SweepError> {
     let rrd = dir.join(format!("{}.rrd", point.name));
     let part = part_path(&rrd);
-    let scene = Scene::new(&loaded.preset).map_err(|e| format!("{}: {e}", point.name))?;
+    let scene = Scene::new(&loaded.preset).map_err(|source| SweepError::Setup {
+        point: point.name.clone(),
+        source: Box::new(source),
+    })?;
     let frames = plan.frames_of(loaded, &scene);
-    let batching = telemetry::file_batching().map_err(|e| e.to_string())?;
+    let batching = telemetry::file_batching()?;
     let stream = rerun::RecordingStreamBuilder::new("weft")
         .with_default_blueprint(blueprint::default())
         .batcher_config(batching)
         .save(&part)
-        .map_err(|e| format!("cannot write {}: {e}", part.display()))?;
+        .map_err(|source| SweepError::Recording {
+            path: part.clone(),
+            source,
+        })?;
     let telemetry = Telemetry::new(stream.clone(), loaded.preset.telemetry);
     let never = AtomicBool::new(false);
-    let mut run = Run::start(scene, telemetry, &plan.preset, &loaded.resolved)
-        .map_err(|e| format!("{}: {e}", point.name))?;
+    let run_error = |source| SweepError::Run {
+        point: point.name.clone(),
+        source: Box::new(source),
+    };
+    let mut run =
+        Run::start(scene, telemetry, &plan.preset, &loaded.resolved).map_err(run_error)?;
     let outcome = run.run(frames, &never, |_| {});
-    if let Err(crate::record::RunError::Telemetry(e)) = &outcome {
-        return Err(format!("{}: {e}", point.name));
+    if let Err(e @ crate::record::RunError::Telemetry(_)) = outcome {
+        return Err(run_error(e));
     }
     // `finish` flushes the file; only a complete one is renamed into place.
-    let figures = run.finish().map_err(|e| format!("{}: {e}", point.name))?;
+    let figures = run.finish().map_err(run_error)?;
     drop(stream);
-    std::fs::rename(&part, &rrd)
-        .map_err(|e| format!("renaming {} into place: {e}", part.display()))?;
+    std::fs::rename(&part, &rrd).map_err(file("renaming into place", &part))?;
     let checks = verdict(loaded.preset.expect.as_ref(), &figures);
     let result = PointResult {
         index: point.index,
@@ -414,7 +507,7 @@ pub fn run(
     jobs: usize,
     stop: &AtomicBool,
     mut progress: impl FnMut(Progress),
-) -> Result<Outcome, String> {
+) -> Result<Outcome, SweepError> {
     prepare(dir, &plan.manifest())?;
     let mine: Vec<&(Point, Loaded)> = plan
         .points
@@ -465,6 +558,7 @@ pub fn run(
                     progress(Progress::Done(Box::new(r), t));
                 }
                 Err(e) => {
+                    let e = e.to_string();
                     outcome.errors.push(e.clone());
                     progress(Progress::Error(e));
                 }

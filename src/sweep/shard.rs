@@ -21,17 +21,87 @@ pub struct Shard {
     pub count: usize,
 }
 
+/// A shard that does not exist, or that the environment names wrongly.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ShardError {
+    /// No shards at all.
+    #[error("{origin}: the number of shards must be at least 1")]
+    NoShards {
+        /// Where the shard came from (`--shard 0/0`, a Slurm task…).
+        origin: String,
+    },
+    /// An index past the last shard.
+    #[error("{origin}: shard {index} of {count} does not exist (shards are numbered 0 to {})", count - 1)]
+    NoSuchShard {
+        /// Where the shard came from.
+        origin: String,
+        /// The index.
+        index: usize,
+        /// How many shards there are.
+        count: usize,
+    },
+    /// `--shard` not written `I/N`.
+    #[error("{origin}: expected I/N, e.g. 0/4 (the first of 4 shards)")]
+    Format {
+        /// The flag as written.
+        origin: String,
+    },
+    /// `I` or `N` not a whole number.
+    #[error("{origin}: `{text}` is not a whole number; expected I/N, e.g. 0/4")]
+    NotWhole {
+        /// The flag as written.
+        origin: String,
+        /// The part that is not a number.
+        text: String,
+    },
+    /// An environment variable that should be a whole number.
+    #[error("{name}={value}: not a whole number")]
+    Variable {
+        /// The variable.
+        name: String,
+        /// Its value.
+        value: String,
+    },
+    /// A Slurm task id without the task count.
+    #[error(
+        "SLURM_ARRAY_TASK_ID is set but not SLURM_ARRAY_TASK_COUNT: give the number of shards with --shards N"
+    )]
+    SlurmCount,
+    /// A Slurm task id outside its array.
+    #[error("SLURM_ARRAY_TASK_ID={id} is not in the array {min}-…:{step}")]
+    NotInArray {
+        /// The task id.
+        id: usize,
+        /// The array's first id.
+        min: usize,
+        /// Its step.
+        step: usize,
+    },
+    /// A Kubernetes completion index without the number of shards.
+    #[error(
+        "JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job): give the number of shards, the Job's completions, with --shards N"
+    )]
+    JobCount,
+    /// `--shards N` without a shard index anywhere.
+    #[error(
+        "--shards {0}: no shard index in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX); use --shard I/{0} to pick one"
+    )]
+    NoIndex(usize),
+}
+
 impl Shard {
     /// A checked shard.
-    pub fn new(index: usize, count: usize, origin: &str) -> Result<Self, String> {
+    pub fn new(index: usize, count: usize, origin: &str) -> Result<Self, ShardError> {
+        let origin = origin.to_string();
         if count == 0 {
-            return Err(format!("{origin}: the number of shards must be at least 1"));
+            return Err(ShardError::NoShards { origin });
         }
         if index >= count {
-            return Err(format!(
-                "{origin}: shard {index} of {count} does not exist (shards are numbered 0 to {})",
-                count - 1
-            ));
+            return Err(ShardError::NoSuchShard {
+                origin,
+                index,
+                count,
+            });
         }
         Ok(Self { index, count })
     }
@@ -49,16 +119,17 @@ impl std::fmt::Display for Shard {
 }
 
 impl FromStr for Shard {
-    type Err = String;
+    type Err = ShardError;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, ShardError> {
         let origin = format!("--shard {s}");
-        let (i, n) = s
-            .split_once('/')
-            .ok_or_else(|| format!("{origin}: expected I/N, e.g. 0/4 (the first of 4 shards)"))?;
+        let (i, n) = s.split_once('/').ok_or_else(|| ShardError::Format {
+            origin: origin.clone(),
+        })?;
         let num = |x: &str| {
-            x.trim().parse::<usize>().map_err(|_| {
-                format!("{origin}: `{x}` is not a whole number; expected I/N, e.g. 0/4")
+            x.trim().parse::<usize>().map_err(|_| ShardError::NotWhole {
+                origin: origin.clone(),
+                text: x.to_string(),
             })
         };
         Shard::new(num(i)?, num(n)?, &origin)
@@ -71,35 +142,32 @@ pub fn resolve(
     flag: Option<Shard>,
     shards: Option<usize>,
     vars: impl Fn(&str) -> Option<String>,
-) -> Result<Option<Shard>, String> {
+) -> Result<Option<Shard>, ShardError> {
     if let Some(s) = flag {
         return Ok(Some(s));
     }
-    let num = |name: &str| -> Result<Option<usize>, String> {
+    let num = |name: &str| -> Result<Option<usize>, ShardError> {
         match vars(name) {
             None => Ok(None),
             Some(v) => v
                 .trim()
                 .parse::<usize>()
                 .map(Some)
-                .map_err(|_| format!("{name}={v}: not a whole number")),
+                .map_err(|_| ShardError::Variable {
+                    name: name.to_string(),
+                    value: v,
+                }),
         }
     };
     if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
         let count = match (shards, num("SLURM_ARRAY_TASK_COUNT")?) {
             (Some(n), _) | (None, Some(n)) => n,
-            (None, None) => {
-                return Err(
-                    "SLURM_ARRAY_TASK_ID is set but not SLURM_ARRAY_TASK_COUNT: give the number of shards with --shards N".into(),
-                );
-            }
+            (None, None) => return Err(ShardError::SlurmCount),
         };
         let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
         let step = num("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
         if id < min || !(id - min).is_multiple_of(step) {
-            return Err(format!(
-                "SLURM_ARRAY_TASK_ID={id} is not in the array {min}-…:{step}"
-            ));
+            return Err(ShardError::NotInArray { id, min, step });
         }
         let origin = format!(
             "Slurm array task {id} (SLURM_ARRAY_TASK_MIN={min}, SLURM_ARRAY_TASK_STEP={step}, {count} tasks)"
@@ -107,9 +175,7 @@ pub fn resolve(
         return Shard::new((id - min) / step, count, &origin).map(Some);
     }
     if let Some(index) = num("JOB_COMPLETION_INDEX")? {
-        let count = shards.ok_or(
-            "JOB_COMPLETION_INDEX is set (a Kubernetes Indexed Job): give the number of shards, the Job's completions, with --shards N",
-        )?;
+        let count = shards.ok_or(ShardError::JobCount)?;
         return Shard::new(
             index,
             count,
@@ -118,9 +184,7 @@ pub fn resolve(
         .map(Some);
     }
     if let Some(n) = shards {
-        return Err(format!(
-            "--shards {n}: no shard index in the environment (SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX); use --shard I/{n} to pick one"
-        ));
+        return Err(ShardError::NoIndex(n));
     }
     Ok(None)
 }

@@ -11,7 +11,7 @@
 //! only the latest row per frame).
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use rerun::dataframe::{
     ChunkStoreConfig, ChunkStoreHandle, EntityPath, EntityPathFilter, QueryEngine, QueryExpression,
@@ -111,32 +111,78 @@ const MAIN: [&str; 5] = [
 /// The SDK's own timeline: when each log call was made.
 const LOG_TIME: &str = "log_time";
 
+/// Why a `.rrd` file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file could not be opened.
+    #[error("{}: {source}", path.display())]
+    Open {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// The file is not a Rerun recording (or not one this Rerun reads).
+    #[error("{}: not a Rerun recording{}", path.display(), detail.as_deref().map(|d| format!(": {d}")).unwrap_or_else(|| " (no message could be decoded)".into()))]
+    NotARecording {
+        /// The file.
+        path: PathBuf,
+        /// What the decoder said, if anything.
+        detail: Option<String>,
+    },
+    /// Its messages decode but do not make a recording.
+    #[error("{}: bad recording: {detail}", path.display())]
+    Bad {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong.
+        detail: String,
+    },
+    /// It holds no recording, only (say) a blueprint.
+    #[error("{}: holds no recording", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// It holds several recordings where one was expected.
+    #[error("{}: holds {} recordings ({}); weft expects one run per file", path.display(), ids.len(), ids.join(", "))]
+    Several {
+        /// The file.
+        path: PathBuf,
+        /// The recordings' ids.
+        ids: Vec<String>,
+    },
+}
+
 /// Reads the one recording in a `.rrd` file. A file cut short (by a crash)
 /// reads up to its last complete message. A file holding several
 /// recordings is an error that says how many (use [`read_all`]).
-pub fn read(path: &Path) -> Result<Recording, String> {
+pub fn read(path: &Path) -> Result<Recording, ReadError> {
     let mut all = read_all(path)?;
     match all.len() {
-        0 => Err(format!("{}: holds no recording", path.display())),
+        0 => Err(ReadError::Empty { path: path.into() }),
         1 => Ok(all.remove(0)),
-        n => Err(format!(
-            "{}: holds {n} recordings ({}); weft expects one run per file",
-            path.display(),
-            all.iter()
-                .map(|r| r.id.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
+        _ => Err(ReadError::Several {
+            path: path.into(),
+            ids: all.into_iter().map(|r| r.id).collect(),
+        }),
     }
 }
 
 /// Reads every recording in a `.rrd` file, in the order they start in it
 /// (blueprints are skipped).
-pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read_all(path: &Path) -> Result<Vec<Recording>, ReadError> {
+    let file = std::fs::File::open(path).map_err(|source| ReadError::Open {
+        path: path.into(),
+        source,
+    })?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let mut decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
-        .map_err(|e| format!("{}: not a Rerun recording: {e}", path.display()))?;
+    let mut decoder = DecoderApp::decode_eager(std::io::BufReader::new(file)).map_err(|e| {
+        ReadError::NotARecording {
+            path: path.into(),
+            detail: Some(e.to_string()),
+        }
+    })?;
     let mut messages = Vec::new();
     let mut order = Vec::new();
     let mut failed = false;
@@ -163,14 +209,19 @@ pub fn read_all(path: &Path) -> Result<Vec<Recording>, String> {
         || decoder.num_bytes_processed() < size
         || decoder.rrd_manifests().map_or(true, |m| m.is_empty());
     if decoded == 0 {
-        return Err(format!(
-            "{}: not a Rerun recording (no message could be decoded)",
-            path.display()
-        ));
+        return Err(ReadError::NotARecording {
+            path: path.into(),
+            detail: None,
+        });
     }
     let last = order.last().cloned();
-    let mut stores = ChunkStore::from_log_msgs(&ChunkStoreConfig::ALL_DISABLED, messages)
-        .map_err(|e| format!("{}: bad recording: {e}", path.display()))?;
+    let mut stores =
+        ChunkStore::from_log_msgs(&ChunkStoreConfig::ALL_DISABLED, messages).map_err(|e| {
+            ReadError::Bad {
+                path: path.into(),
+                detail: e.to_string(),
+            }
+        })?;
     order
         .into_iter()
         .filter_map(|id| {

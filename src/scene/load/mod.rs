@@ -23,7 +23,7 @@ mod overrides;
 mod source;
 
 pub use locate::PresetError;
-pub use overrides::Override;
+pub use overrides::{Override, OverrideError};
 pub use source::{MAX_FILE_BYTES, Origin};
 
 pub use crate::scene::preset::nearest;
@@ -92,7 +92,10 @@ fn build(base: Table, sources: &[Source], overrides: &[Override]) -> Result<Load
 /// Applies the overrides to `table`, deserialises and validates.
 fn check(mut table: Table, overrides: &[Override]) -> Result<(Table, Preset), Failure> {
     for (index, o) in overrides.iter().enumerate() {
-        overrides::set(&mut table, o).map_err(|message| Failure::Set { index, message })?;
+        overrides::set(&mut table, o).map_err(|e| Failure::Set {
+            index,
+            message: e.to_string(),
+        })?;
     }
     let preset: Preset = serde_path_to_error::deserialize(table.clone()).map_err(|e| {
         let key = Some(e.path().to_string()).filter(|k| k != ".");

@@ -14,19 +14,48 @@ pub struct Override {
     pub value: Value,
 }
 
-impl std::str::FromStr for Override {
-    type Err = String;
+/// An override that does not parse, or does not fit the preset.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum OverrideError {
+    /// No `=`.
+    #[error("`{0}` is not of the form key.path=value")]
+    NoValue(String),
+    /// The key is not a dotted path.
+    #[error("`{0}` is not a key path like `solver.weights.curvature` or `bodies[0].car.heading`")]
+    NotAPath(String),
+    /// `extend` names a file, resolved when it is read.
+    #[error(
+        "`extend` cannot be set with --set: it is resolved when the file is read; write `extend = \"…\"` in a preset file that you load instead"
+    )]
+    Extend,
+    /// The path goes into a value that is not a table.
+    #[error("`{0}` is not a table")]
+    NotATable(String),
+    /// The path indexes a value that is not an array.
+    #[error("`{0}` is not an array")]
+    NotAnArray(String),
+    /// The path indexes past an array's end.
+    #[error("index {index} is out of range: `{array}` has {len} items")]
+    OutOfRange {
+        /// The array's path.
+        array: String,
+        /// The index given.
+        index: usize,
+        /// How many items it has.
+        len: usize,
+    },
+}
 
-    fn from_str(s: &str) -> Result<Self, String> {
+impl std::str::FromStr for Override {
+    type Err = OverrideError;
+
+    fn from_str(s: &str) -> Result<Self, OverrideError> {
         let (key, raw) = s
             .split_once('=')
-            .ok_or_else(|| format!("`{}` is not of the form key.path=value", clip(s)))?;
+            .ok_or_else(|| OverrideError::NoValue(clip(s).into_owned()))?;
         let key = key.trim();
         if key.is_empty() || parse_path(key).is_none() {
-            return Err(format!(
-                "`{}` is not a key path like `solver.weights.curvature` or `bodies[0].car.heading`",
-                clip(key)
-            ));
+            return Err(OverrideError::NotAPath(clip(key).into_owned()));
         }
         let raw = raw.trim();
         let value = format!("v = {raw}")
@@ -79,13 +108,11 @@ pub(super) fn is_within(key: &str, path: &str) -> bool {
 }
 
 /// Writes `o.value` at `o.key`, creating tables on the way.
-pub(super) fn set(table: &mut Table, o: &Override) -> Result<(), String> {
-    let path = parse_path(&o.key).ok_or("not a key path")?;
+pub(super) fn set(table: &mut Table, o: &Override) -> Result<(), OverrideError> {
+    let path =
+        parse_path(&o.key).ok_or_else(|| OverrideError::NotAPath(clip(&o.key).into_owned()))?;
     if path.first() == Some(&Segment::Key("extend".into())) {
-        return Err(
-            "`extend` cannot be set with --set: it is resolved when the file is read; write `extend = \"…\"` in a preset file that you load instead"
-                .into(),
-        );
+        return Err(OverrideError::Extend);
     }
     let mut root = Value::Table(std::mem::take(table));
     let result = set_in(&mut root, &path, 0, &o.value);
@@ -96,7 +123,12 @@ pub(super) fn set(table: &mut Table, o: &Override) -> Result<(), String> {
     result
 }
 
-fn set_in(here: &mut Value, path: &[Segment], depth: usize, new: &Value) -> Result<(), String> {
+fn set_in(
+    here: &mut Value,
+    path: &[Segment],
+    depth: usize,
+    new: &Value,
+) -> Result<(), OverrideError> {
     let Some(seg) = path.get(depth) else {
         *here = new.clone();
         return Ok(());
@@ -105,7 +137,7 @@ fn set_in(here: &mut Value, path: &[Segment], depth: usize, new: &Value) -> Resu
     match seg {
         Segment::Key(k) => {
             let Value::Table(t) = here else {
-                return Err(format!("`{}` is not a table", walked()));
+                return Err(OverrideError::NotATable(walked()));
             };
             let child = t
                 .entry(k.clone())
@@ -114,11 +146,13 @@ fn set_in(here: &mut Value, path: &[Segment], depth: usize, new: &Value) -> Resu
         }
         Segment::Index(i) => {
             let Value::Array(a) = here else {
-                return Err(format!("`{}` is not an array", walked()));
+                return Err(OverrideError::NotAnArray(walked()));
             };
             let len = a.len();
-            let item = a.get_mut(*i).ok_or_else(|| {
-                format!("index {i} is out of range: `{}` has {len} items", walked())
+            let item = a.get_mut(*i).ok_or_else(|| OverrideError::OutOfRange {
+                array: walked(),
+                index: *i,
+                len,
             })?;
             set_in(item, path, depth + 1, new)
         }
