@@ -72,9 +72,9 @@ impl eframe::App for WeftApp {
             .default_size(340.0)
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
-        // The simulation runs on its own thread; keep showing its frames.
-        ui.ctx()
-            .request_repaint_after(std::time::Duration::from_millis(16));
+        // No repaint is asked for here: the session asks for one when its
+        // status changes, and the viewer when a message arrives, so a
+        // paused window with nobody at it does not redraw.
         self.take_screenshot(ui.ctx());
     }
 
@@ -250,6 +250,8 @@ pub fn run(
                 re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
             );
             viewer.add_log_receiver(rx);
+            let ctx = cc.egui_ctx.clone();
+            session.set_waker(move || ctx.request_repaint());
             Ok(Box::new(WeftApp {
                 viewer,
                 panel,

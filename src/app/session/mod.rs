@@ -150,10 +150,15 @@ pub struct Status {
     pub error: Option<String>,
 }
 
+/// Called by the simulation thread whenever the [`Status`] changes (the
+/// window asks egui for a repaint: nothing else repaints it while paused).
+pub type Waker = Arc<dyn Fn() + Send + Sync>;
+
 /// The handle the panel holds.
 pub struct Session {
     tx: Sender<Command>,
     status: Arc<Mutex<Status>>,
+    waker: Arc<Mutex<Option<Waker>>>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -170,7 +175,14 @@ impl Session {
             speed: 1.0,
             ..Status::default()
         }));
-        let worker = Worker::new(loaded, name, Arc::new(forward), status.clone())?;
+        let waker: Arc<Mutex<Option<Waker>>> = Arc::default();
+        let worker = Worker::new(
+            loaded,
+            name,
+            Arc::new(forward),
+            status.clone(),
+            waker.clone(),
+        )?;
         let (tx, rx) = channel();
         let thread = std::thread::Builder::new()
             .name("weft-sim".into())
@@ -179,8 +191,15 @@ impl Session {
         Ok(Self {
             tx,
             status,
+            waker,
             thread: Some(thread),
         })
+    }
+
+    /// Has the simulation thread call `waker` after every change of the
+    /// status (a step, a command handled, an error).
+    pub fn set_waker(&self, waker: impl Fn() + Send + Sync + 'static) {
+        *self.waker.lock().expect("not poisoned") = Some(Arc::new(waker));
     }
 
     /// Sends a command; it is handled before the next step.

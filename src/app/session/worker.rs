@@ -15,7 +15,7 @@ use crate::solver::{Family, PerFamily};
 use crate::telemetry::Collect;
 
 use super::runs::{Forward, SERIES_VALUES, Start, Tee, open};
-use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
+use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, Waker, verdict_text};
 
 /// What the simulation thread owns: the current run and its history, every
 /// run of the session, the stream of the current one, and the pacing.
@@ -34,6 +34,7 @@ pub(super) struct Worker {
     /// The file the current run is recorded to, if any.
     recording: Option<PathBuf>,
     status: Arc<Mutex<Status>>,
+    waker: Arc<Mutex<Option<Waker>>>,
     playing: bool,
     speed: f32,
     next_step: Instant,
@@ -46,6 +47,7 @@ impl Worker {
         name: String,
         forward: Forward,
         status: Arc<Mutex<Status>>,
+        waker: Arc<Mutex<Option<Waker>>>,
     ) -> Result<Self, String> {
         let base = load::load(&name, &[]).ok().map(|l| l.preset);
         let opened = open(
@@ -74,6 +76,7 @@ impl Worker {
             inspect: None,
             recording: None,
             status,
+            waker,
             playing: false,
             speed: 1.0,
             next_step: Instant::now(),
@@ -379,6 +382,15 @@ impl Worker {
 
     fn set_error(&self, e: Option<String>) {
         self.status.lock().expect("not poisoned").error = e;
+        self.wake();
+    }
+
+    /// Tells the window that the status changed.
+    fn wake(&self) {
+        let waker = self.waker.lock().expect("not poisoned").clone();
+        if let Some(waker) = waker {
+            waker();
+        }
     }
 
     /// Publishes everything, the preset included (after a command).
@@ -394,12 +406,15 @@ impl Worker {
         s.runs = self.runs.clone();
         s.recording = self.recording.clone();
         progress.write(&mut s);
+        drop(s);
+        self.wake();
     }
 
     /// Publishes what a step changes (the preset does not change on a step).
     fn publish_progress(&self) {
         let progress = self.progress();
         progress.write(&mut self.status.lock().expect("not poisoned"));
+        self.wake();
     }
 
     fn progress(&self) -> Progress {
