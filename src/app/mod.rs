@@ -85,7 +85,14 @@ impl eframe::App for WeftApp {
     /// With `--screenshot`, the window shows what it shows nobody pointing
     /// at it: wherever the display leaves the pointer (Xvfb, the middle of
     /// the screen), no tooltip opens over a plot.
-    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+    ///
+    /// The simulation's keys that the viewer would take for its timeline
+    /// (Space, →, Backspace) are handed to the panel as its function keys
+    /// before the viewer sees them, unless a text field is being typed in.
+    fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        if !ctx.text_edit_focused() {
+            panel::take_simulation_keys(&mut raw_input.events);
+        }
         if self.screenshot.is_some() {
             raw_input
                 .events
