@@ -1032,3 +1032,69 @@ fn space_arrow_and_backspace_drive_the_simulation() {
     let s = h.state().session.status();
     assert_eq!((s.playing, s.frame, s.run.number), (false, 0, 2));
 }
+
+/// A frame past the run's last is refused with the reason, not clamped;
+/// a typed frame is not overwritten while the simulation plays.
+#[test]
+fn the_branch_field_is_the_users() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    for _ in 0..10 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 10));
+    h.run();
+    let row = |h: &Harness<'_, State>| (h.get_by_label("at frame").rect(), 0);
+    type_into(&mut h, row, "99999", |_| {});
+    press(&mut h, egui::Key::Enter);
+    click(&mut h, "Branch");
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.error
+            .as_deref()
+            .is_some_and(|e| e.contains("cannot branch at frame 99999"))
+    }));
+    h.run();
+    h.get_by_label_contains("cannot branch at frame 99999");
+    assert_eq!(h.state().session.status().run.number, 1);
+
+    // Typed while playing: the frame moves on, the text stays.
+    h.state().session.send(Command::Play);
+    type_into(&mut h, row, "7", |_| {});
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame > 20));
+    h.run();
+    press(&mut h, egui::Key::Enter);
+    h.state().session.send(Command::Pause);
+    assert!(h.state().session.wait_for(WAIT, |s| !s.playing));
+    h.run();
+    click(&mut h, "Branch");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 2 && s.frame == 7),
+        "{:?}",
+        h.state().session.status().frame
+    );
+}
+
+/// A new run (Reset, Load) starts its speed readouts from nothing.
+#[test]
+fn a_new_run_clears_the_speed_readouts() {
+    let session = state("hanging_sheet").session;
+    session.send(Command::Play);
+    assert!(session.wait_for(WAIT, |s| s.frame > 20 && s.steps_per_second > 0.0));
+    session.send(Command::Pause);
+    session.send(Command::Reset);
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let s = session.status();
+    assert_eq!((s.steps_per_second, s.step_ms), (0.0, 0.0));
+}
+
+/// `PlayTo` (what `weft gui --screenshot --frames N` sends) stops at N.
+#[test]
+fn play_to_stops_at_its_frame() {
+    let session = state("hanging_sheet").session;
+    session.send(Command::PlayTo(40));
+    assert!(session.wait_for(WAIT, |s| s.frame >= 40 && !s.playing));
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(session.status().frame, 40);
+}

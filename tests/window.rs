@@ -50,6 +50,8 @@ fn the_window_shows_the_cloth_and_the_panel() {
         "weft gui --screenshot failed:\n{stderr}"
     );
     assert!(stderr.contains("saved the window"), "{stderr}");
+    // `--frames 300` plays exactly 300 frames, and the picture is of frame 300.
+    assert!(stderr.contains("at frame 300"), "{stderr}");
     // Nothing for the viewer to pop up as a notification over the panel at
     // start: its layout arrives after the first frame (so the `sim_time`
     // timeline it names exists), and its memory-limit notice is filtered.

@@ -49,6 +49,7 @@ struct WeftScreenshot;
 /// Where `--screenshot` is: playing, waiting for the viewer to show the
 /// last frame, then waiting for egui's picture.
 enum Shot {
+    Start,
     Playing,
     Settling(u32),
     Requested,
@@ -114,13 +115,14 @@ impl WeftApp {
             std::process::exit(2);
         }
         match state {
+            Shot::Start => {
+                self.session.send(Command::PlayTo(shot.frames));
+                *state = Shot::Playing;
+            }
             Shot::Playing => {
                 let status = self.session.status();
-                if status.frame >= shot.frames {
-                    self.session.send(Command::Pause);
+                if status.frame >= shot.frames && !status.playing {
                     *state = Shot::Settling(30);
-                } else if !status.playing {
-                    self.session.send(Command::Play);
                 }
             }
             Shot::Settling(0) => {
@@ -151,9 +153,11 @@ impl WeftApp {
                     let saved = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
                         .map(|img| img.save(&shot.path));
                     match saved {
-                        Some(Ok(())) => {
-                            eprintln!("saved the window ({w}×{h}) to {}", shot.path.display())
-                        }
+                        Some(Ok(())) => eprintln!(
+                            "saved the window ({w}×{h}) at frame {} to {}",
+                            self.session.status().frame,
+                            shot.path.display()
+                        ),
                         Some(Err(e)) => {
                             re_log::error!("cannot save {}: {e}", shot.path.display());
                             std::process::exit(2);
@@ -263,7 +267,7 @@ pub fn run(
                 viewer,
                 panel,
                 session,
-                screenshot: screenshot.map(|s| (s, Shot::Playing, Instant::now())),
+                screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
             }))
         }),
     )

@@ -140,6 +140,9 @@ pub struct Panel {
     message: Option<(bool, String)>,
     branch_frame: u64,
     branch_at: Option<BranchAt>,
+    /// Whether the branch field had the keyboard focus last frame (it is
+    /// not overwritten while it is being typed in).
+    branch_editing: bool,
     particle: usize,
     inspecting: bool,
     save_diff: bool,
@@ -172,6 +175,7 @@ impl Panel {
             message: None,
             branch_frame: 0,
             branch_at: None,
+            branch_editing: false,
             particle: 0,
             inspecting: false,
             save_diff: load::load(&status.preset_name, &[]).is_ok(),
@@ -418,6 +422,8 @@ impl Panel {
             }
             ui.label("at frame");
             match self.branch_at {
+                // Being typed in: the text is the user's.
+                _ if self.branch_editing => {}
                 None => self.branch_frame = status.frame,
                 // Shown as a frame; the session finds the exact one.
                 Some(BranchAt::Time(t)) => {
@@ -426,10 +432,12 @@ impl Panel {
                 }
                 Some(BranchAt::Frame(_)) => {}
             }
-            if ui
-                .add(egui::DragValue::new(&mut self.branch_frame).range(0..=status.frame))
-                .changed()
-            {
+            // Not bounded by the run's frame: a frame past it is refused by
+            // the session, with the reason, rather than quietly clamped.
+            let field =
+                ui.add(egui::DragValue::new(&mut self.branch_frame).update_while_editing(false));
+            self.branch_editing = field.has_focus();
+            if field.changed() {
                 self.branch_at = Some(BranchAt::Frame(self.branch_frame));
             }
             if let Some(BranchAt::Time(t)) = self.branch_at {

@@ -38,6 +38,8 @@ use worker::Worker;
 pub enum Command {
     /// Run in real time (times the speed).
     Play,
+    /// Play until this frame, then pause there (`weft gui --screenshot`).
+    PlayTo(u64),
     /// Stop stepping.
     Pause,
     /// Step one frame (pauses).

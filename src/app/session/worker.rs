@@ -36,6 +36,8 @@ pub(super) struct Worker {
     status: Arc<Mutex<Status>>,
     waker: Arc<Mutex<Option<Waker>>>,
     playing: bool,
+    /// While playing, the frame to pause at.
+    stop_at: Option<u64>,
     speed: f32,
     next_step: Instant,
     recent: std::collections::VecDeque<Instant>,
@@ -78,6 +80,7 @@ impl Worker {
             status,
             waker,
             playing: false,
+            stop_at: None,
             speed: 1.0,
             next_step: Instant::now(),
             recent: Default::default(),
@@ -108,6 +111,11 @@ impl Worker {
             for c in pending {
                 self.handle(c);
             }
+            if self.playing && self.stop_at.is_some_and(|f| self.run.scene.frame() >= f) {
+                self.playing = false;
+                self.stop_at = None;
+                self.publish_progress();
+            }
             if self.playing {
                 let now = Instant::now();
                 if now >= self.next_step {
@@ -133,6 +141,12 @@ impl Worker {
         match c {
             Command::Play => {
                 self.playing = true;
+                self.stop_at = None;
+                self.next_step = Instant::now();
+            }
+            Command::PlayTo(frame) => {
+                self.playing = self.run.scene.frame() < frame;
+                self.stop_at = Some(frame);
                 self.next_step = Instant::now();
             }
             Command::Pause => self.playing = false,
@@ -284,6 +298,9 @@ impl Worker {
                     self.series.clear();
                 }
                 self.tee = opened.tee;
+                // The speed readouts are the new run's.
+                self.recent.clear();
+                self.status.lock().expect("not poisoned").step_ms = 0.0;
                 let old = std::mem::replace(&mut self.rec, opened.rec);
                 let flushed = old.flush_blocking();
                 self.run = opened.run;
