@@ -1037,7 +1037,9 @@ fn space_arrow_and_backspace_drive_the_simulation() {
 /// a typed frame is not overwritten while the simulation plays.
 #[test]
 fn the_branch_field_is_the_users() {
-    let mut h = harness(state("hanging_sheet"));
+    let s = state("hanging_sheet");
+    let link = s.panel.link();
+    let mut h = harness(s);
     h.run();
     for _ in 0..10 {
         h.state().session.send(Command::Step);
@@ -1057,12 +1059,16 @@ fn the_branch_field_is_the_users() {
     h.get_by_label_contains("cannot branch at frame 99999");
     assert_eq!(h.state().session.status().run.number, 1);
 
-    // Typed while playing: the frame moves on, the text stays.
+    // Typed while playing: the frame moves on, the text stays; then the
+    // viewer's time cursor moves, and the typed frame still stays.
     h.state().session.send(Command::Play);
     type_into(&mut h, row, "7", |_| {});
     assert!(h.state().session.wait_for(WAIT, |s| s.frame > 20));
     h.run();
     press(&mut h, egui::Key::Enter);
+    let id = h.state().session.status().run.recording_id;
+    link.lock().unwrap().time(id.clone(), 0.25e9);
+    h.run();
     h.state().session.send(Command::Pause);
     assert!(h.state().session.wait_for(WAIT, |s| !s.playing));
     h.run();
@@ -1074,6 +1080,57 @@ fn the_branch_field_is_the_users() {
         "{:?}",
         h.state().session.status().frame
     );
+
+    // Cleared, the field follows the time cursor again.
+    type_into(&mut h, row, "3", |_| {});
+    press(&mut h, egui::Key::Enter);
+    click(&mut h, "clear");
+    let id = h.state().session.status().run.recording_id;
+    let dt = h.state().session.status().preset.unwrap().solver.dt as f64;
+    link.lock().unwrap().time(id, 5.0 * dt * 1e9);
+    h.run();
+    h.get_by_label_contains("(time cursor");
+    click(&mut h, "Branch");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 3 && s.frame == 5)
+    );
+}
+
+/// While the viewer follows the run, the simulation keeps no more than
+/// `MAX_LEAD` ahead of the frame it shows; a cursor that stands still (the
+/// user scrubbed) does not hold it back.
+#[test]
+fn the_simulation_waits_for_the_viewer() {
+    use weft::app::session::{FOLLOWING, MAX_LEAD};
+    let session = state("hanging_sheet").session;
+    let id = session.status().run.recording_id;
+    let dt = session.status().preset.unwrap().solver.dt as f64;
+    let lead = (MAX_LEAD / dt).ceil() as u64;
+    session.pace_to_viewer();
+    // Before the viewer's first report, the simulation waits for it.
+    session.send(Command::Play);
+    assert!(session.wait_for(WAIT, |s| s.frame >= lead));
+    std::thread::sleep(FOLLOWING / 4);
+    assert!(
+        session.status().frame <= lead + 1,
+        "{}",
+        session.status().frame
+    );
+    // The viewer catches up: the simulation goes on, and waits again.
+    session.viewer_shows(id.clone(), BranchAt::Time(lead as f64 * dt));
+    assert!(session.wait_for(WAIT, |s| s.frame >= 2 * lead));
+    std::thread::sleep(FOLLOWING / 4);
+    assert!(
+        session.status().frame <= 2 * lead + 1,
+        "{}",
+        session.status().frame
+    );
+    // The user scrubs back: the simulation runs free.
+    session.viewer_shows(id.clone(), BranchAt::Time(0.0));
+    assert!(session.wait_for(WAIT, |s| s.frame > 4 * lead));
+    session.send(Command::Pause);
 }
 
 /// A new run (Reset, Load) starts its speed readouts from nothing.

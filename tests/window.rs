@@ -52,6 +52,15 @@ fn the_window_shows_the_cloth_and_the_panel() {
     assert!(stderr.contains("saved the window"), "{stderr}");
     // `--frames 300` plays exactly 300 frames, and the picture is of frame 300.
     assert!(stderr.contains("at frame 300"), "{stderr}");
+    // While playing, the simulation waited for the viewer: the frame drawn
+    // was never more than half a second behind it.
+    let behind: f64 = stderr
+        .split("the view was at most ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no lag reported:\n{stderr}"));
+    assert!(behind <= 0.5, "the view was {behind} s behind:\n{stderr}");
     // Nothing for the viewer to pop up as a notification over the panel at
     // start: its layout arrives after the first frame (so the `sim_time`
     // timeline it names exists), and its memory-limit notice is filtered.

@@ -31,7 +31,7 @@ use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
 use crate::scene::{Override, load};
 use crate::telemetry::paths;
 use panel::Panel;
-use session::{Command, Session};
+use session::{BranchAt, Command, Session};
 
 /// `weft gui --screenshot`: play some frames, save the window, quit.
 #[derive(Clone, Debug)]
@@ -61,6 +61,9 @@ pub struct WeftApp {
     panel: Panel,
     session: Session,
     screenshot: Option<(Screenshot, Shot, Instant)>,
+    /// With `--screenshot`: how far (simulated seconds) the viewer's time
+    /// cursor was at most behind the simulation while playing.
+    lag: f64,
 }
 
 impl eframe::App for WeftApp {
@@ -121,6 +124,19 @@ impl WeftApp {
             }
             Shot::Playing => {
                 let status = self.session.status();
+                let link = self.panel.link();
+                let cursor = link.lock().expect("not poisoned").cursor.clone();
+                if let Some((id, at)) = cursor
+                    && id == status.run.recording_id
+                    && status.playing
+                {
+                    let dt = status.preset.as_ref().map_or(0.0, |p| p.solver.dt) as f64;
+                    let shown = match at {
+                        BranchAt::Frame(f) => f as f64 * dt,
+                        BranchAt::Time(t) => t,
+                    };
+                    self.lag = self.lag.max(status.time - shown);
+                }
                 if status.frame >= shot.frames && !status.playing {
                     *state = Shot::Settling(30);
                 }
@@ -154,9 +170,10 @@ impl WeftApp {
                         .map(|img| img.save(&shot.path));
                     match saved {
                         Some(Ok(())) => eprintln!(
-                            "saved the window ({w}×{h}) at frame {} to {}",
+                            "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation",
                             self.session.status().frame,
-                            shot.path.display()
+                            shot.path.display(),
+                            self.lag
                         ),
                         Some(Err(e)) => {
                             re_log::error!("cannot save {}: {e}", shot.path.display());
@@ -263,11 +280,13 @@ pub fn run(
             viewer.add_log_receiver(rx);
             let ctx = cc.egui_ctx.clone();
             session.set_waker(move || ctx.request_repaint());
+            session.pace_to_viewer();
             Ok(Box::new(WeftApp {
                 viewer,
                 panel,
                 session,
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
+                lag: 0.0,
             }))
         }),
     )

@@ -143,6 +143,9 @@ pub struct Panel {
     /// Whether the branch field had the keyboard focus last frame (it is
     /// not overwritten while it is being typed in).
     branch_editing: bool,
+    /// Whether the branch frame was typed: then it stays until the user
+    /// clears it (or branches), whatever the time cursor does.
+    branch_typed: bool,
     particle: usize,
     inspecting: bool,
     save_diff: bool,
@@ -176,6 +179,7 @@ impl Panel {
             branch_frame: 0,
             branch_at: None,
             branch_editing: false,
+            branch_typed: false,
             particle: 0,
             inspecting: false,
             save_diff: load::load(&status.preset_name, &[]).is_ok(),
@@ -352,9 +356,12 @@ impl Panel {
             if let Some((id, at)) = link.cursor
                 && id == status.run.recording_id
             {
-                self.branch_at = Some(at);
-                if let BranchAt::Frame(f) = at {
-                    self.branch_frame = f;
+                session.viewer_shows(id, at);
+                if !self.branch_typed {
+                    self.branch_at = Some(at);
+                    if let BranchAt::Frame(f) = at {
+                        self.branch_frame = f;
+                    }
                 }
             }
         }
@@ -372,6 +379,7 @@ impl Panel {
         let at = self.branch_at.unwrap_or(BranchAt::Frame(status.frame));
         session.send(Command::Branch(at));
         self.branch_at = None;
+        self.branch_typed = false;
     }
 
     fn transport_ui(&mut self, ui: &mut egui::Ui, session: &Session, status: &Status) {
@@ -439,8 +447,18 @@ impl Panel {
             self.branch_editing = field.has_focus();
             if field.changed() {
                 self.branch_at = Some(BranchAt::Frame(self.branch_frame));
+                self.branch_typed = true;
             }
-            if let Some(BranchAt::Time(t)) = self.branch_at {
+            if self.branch_typed {
+                if ui
+                    .small_button("clear")
+                    .on_hover_text("follow the current frame and the viewer's time cursor again")
+                    .clicked()
+                {
+                    self.branch_typed = false;
+                    self.branch_at = None;
+                }
+            } else if let Some(BranchAt::Time(t)) = self.branch_at {
                 ui.label(format!("(time cursor {t:.2} s)"));
             }
         });
