@@ -179,7 +179,23 @@ fn a_rejected_value_shows_its_message_and_changes_nothing() {
     field.type_text("solver.weights.curvatre=0.3");
     h.run();
     click(&mut h, "Apply");
-    h.get_by_label_contains("did you mean `curvature`");
+    let message = h.get_by_label_contains("did you mean `curvature`");
+    // Said once, without the `--set` of the command line.
+    let text = message.value().unwrap_or_default();
+    assert!(!text.contains("--set"), "{text}");
+    assert_eq!(text.matches("solver.weights.curvatre").count(), 1, "{text}");
+    // Out of range: the key once too.
+    let preset = load::load("hanging_sheet", &[]).unwrap().preset;
+    let e = load::with_overrides(&preset, &["solver.weights.curvature=1.5".parse().unwrap()])
+        .unwrap_err();
+    let text = weft::app::panel::error_text(&e);
+    assert!(!text.contains("--set"), "{text}");
+    assert_eq!(
+        text.matches("solver.weights.curvature").count(),
+        1,
+        "{text}"
+    );
+    assert!(text.contains("out of range"), "{text}");
     assert_eq!(
         h.state().session.status().preset.unwrap().solver.weights[Family::Curvature],
         0.1
@@ -482,7 +498,7 @@ fn shortcuts_drive_the_simulation() {
     h.run();
     h.get_by_label("Step").hover();
     h.run();
-    h.get_by_label_contains("(F7)");
+    h.get_by_label_contains("(F7 or Right arrow)");
 }
 
 /// The viewer's time cursor on the current run is the branch point.
@@ -846,4 +862,296 @@ fn viewer_events_reach_the_panel() {
         link.lock().unwrap().cursor,
         Some(("rec_1".to_string(), BranchAt::Frame(120)))
     );
+}
+
+/// The number field beside a slider, or the `nth` field on the row of the
+/// label `row` (found by where they are drawn).
+fn field_on_row<'h>(
+    h: &'h Harness<'_, State>,
+    row: egui_kittest::Node<'h>,
+    nth: usize,
+) -> egui_kittest::Node<'h> {
+    let row = row.rect();
+    h.query_all_by_role(egui::accesskit::Role::SpinButton)
+        .filter(|n| {
+            let y = n.rect().center().y;
+            y > row.min.y && y < row.max.y
+        })
+        .nth(nth)
+        .expect("a number field on the row")
+}
+
+/// Clicks a number field (it becomes a text field) and types `text` into
+/// it key by key, running the panel after each; `check` runs after each key.
+fn type_into(
+    h: &mut Harness<'_, State>,
+    find: impl Fn(&Harness<'_, State>) -> (egui::Rect, usize),
+    text: &str,
+    check: impl Fn(&Harness<'_, State>),
+) {
+    let (rect, nth) = find(h);
+    let field = h
+        .query_all_by_role(egui::accesskit::Role::SpinButton)
+        .filter(|n| {
+            let y = n.rect().center().y;
+            y > rect.min.y && y < rect.max.y
+        })
+        .nth(nth)
+        .expect("a number field on the row");
+    field.click();
+    h.run();
+    for c in text.chars() {
+        h.event(egui::Event::Text(c.to_string()));
+        h.run();
+        std::thread::sleep(Duration::from_millis(50));
+        check(h);
+    }
+}
+
+fn curvature(h: &Harness<'_, State>) -> f32 {
+    h.state().session.status().preset.unwrap().solver.weights[Family::Curvature]
+}
+
+/// A value typed into a slider's field is taken on Enter, not keystroke by
+/// keystroke: the simulation never sees 0, 0.3 on the way to 0.35.
+#[test]
+fn a_typed_value_applies_on_enter() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    let slider = |h: &Harness<'_, State>| {
+        let r = h
+            .get_by_role_and_label(egui::accesskit::Role::Slider, "λ curvature")
+            .rect();
+        (r, 0)
+    };
+    type_into(&mut h, slider, "0.35", |h| {
+        assert_eq!(curvature(h), 0.1, "applied while typing");
+    });
+    press(&mut h, egui::Key::Enter);
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.preset.as_ref().unwrap().solver.weights[Family::Curvature] == 0.35
+    }));
+    // A slider's value field, then another field: leaving it applies too.
+    type_into(&mut h, slider, "0.2", |h| assert_eq!(curvature(h), 0.35));
+    h.get_by_role_and_label(egui::accesskit::Role::Slider, "λ stretch")
+        .click();
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.preset.as_ref().unwrap().solver.weights[Family::Curvature] == 0.2
+    }));
+}
+
+/// A rejected typed value changes nothing (no value on the way to it
+/// either), and the reason shows in the status line at the top.
+#[test]
+fn a_rejected_typed_value_changes_nothing() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    let wind_x = |h: &Harness<'_, State>| {
+        h.state()
+            .session
+            .status()
+            .preset
+            .unwrap()
+            .environment
+            .wind
+            .velocity
+            .x
+    };
+    let before = wind_x(&h);
+    let row = |h: &Harness<'_, State>| (h.get_by_label("velocity").rect(), 0);
+    type_into(&mut h, row, "2000", |h| {
+        assert_eq!(wind_x(h), before, "applied while typing");
+    });
+    press(&mut h, egui::Key::Enter);
+    std::thread::sleep(Duration::from_millis(200));
+    h.run();
+    assert_eq!(wind_x(&h), before);
+    let message = h.get_by_label_contains("environment.wind.velocity");
+    let text = message.value().unwrap_or_default();
+    assert!(text.contains("out of range"), "{text}");
+    // The status line is above the panel's parts.
+    assert!(
+        message.rect().max.y < h.get_by_label("Load").rect().min.y,
+        "{text}"
+    );
+    // The field shows the value in force again.
+    let row = h.get_by_label("velocity");
+    let x = field_on_row(&h, row, 0);
+    assert!(
+        !x.value().unwrap_or_default().contains("2000"),
+        "{:?}",
+        x.value()
+    );
+}
+
+/// Space plays and pauses, → steps, Backspace resets (as F6, F7, F9 do),
+/// unless a text field is being typed in; the panel names them.
+#[test]
+fn space_arrow_and_backspace_drive_the_simulation() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    h.get_by_label_contains("Space play/pause");
+    press(&mut h, egui::Key::ArrowRight);
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 1));
+    press(&mut h, egui::Key::Space);
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.playing && s.frame > 3)
+    );
+    h.run();
+    press(&mut h, egui::Key::Space);
+    assert!(h.state().session.wait_for(WAIT, |s| !s.playing));
+    press(&mut h, egui::Key::Backspace);
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 2 && s.frame == 0)
+    );
+    h.run();
+    h.get_by_label("Play").hover();
+    h.run();
+    h.get_by_label_contains("F6 or Space");
+
+    // Typing in a field: the keys are the field's.
+    let field = h
+        .query_all_by_role(egui::accesskit::Role::TextInput)
+        .find(|n| n.value().as_deref() == Some("hanging_sheet"))
+        .expect("the preset file field");
+    field.click();
+    h.run();
+    for key in [
+        egui::Key::Space,
+        egui::Key::ArrowRight,
+        egui::Key::Backspace,
+    ] {
+        press(&mut h, key);
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    let s = h.state().session.status();
+    assert_eq!((s.playing, s.frame, s.run.number), (false, 0, 2));
+}
+
+/// A frame past the run's last is refused with the reason, not clamped;
+/// a typed frame is not overwritten while the simulation plays.
+#[test]
+fn the_branch_field_is_the_users() {
+    let s = state("hanging_sheet");
+    let link = s.panel.link();
+    let mut h = harness(s);
+    h.run();
+    for _ in 0..10 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 10));
+    h.run();
+    let row = |h: &Harness<'_, State>| (h.get_by_label("at frame").rect(), 0);
+    type_into(&mut h, row, "99999", |_| {});
+    press(&mut h, egui::Key::Enter);
+    click(&mut h, "Branch");
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.error
+            .as_deref()
+            .is_some_and(|e| e.contains("cannot branch at frame 99999"))
+    }));
+    h.run();
+    h.get_by_label_contains("cannot branch at frame 99999");
+    assert_eq!(h.state().session.status().run.number, 1);
+
+    // Typed while playing: the frame moves on, the text stays; then the
+    // viewer's time cursor moves, and the typed frame still stays.
+    h.state().session.send(Command::Play);
+    type_into(&mut h, row, "7", |_| {});
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame > 20));
+    h.run();
+    press(&mut h, egui::Key::Enter);
+    let id = h.state().session.status().run.recording_id;
+    link.lock().unwrap().time(id.clone(), 0.25e9);
+    h.run();
+    h.state().session.send(Command::Pause);
+    assert!(h.state().session.wait_for(WAIT, |s| !s.playing));
+    h.run();
+    click(&mut h, "Branch");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 2 && s.frame == 7),
+        "{:?}",
+        h.state().session.status().frame
+    );
+
+    // Cleared, the field follows the time cursor again.
+    type_into(&mut h, row, "3", |_| {});
+    press(&mut h, egui::Key::Enter);
+    click(&mut h, "clear");
+    let id = h.state().session.status().run.recording_id;
+    let dt = h.state().session.status().preset.unwrap().solver.dt as f64;
+    link.lock().unwrap().time(id, 5.0 * dt * 1e9);
+    h.run();
+    h.get_by_label_contains("(time cursor");
+    click(&mut h, "Branch");
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |s| s.run.number == 3 && s.frame == 5)
+    );
+}
+
+/// While the viewer follows the run, the simulation keeps no more than
+/// `MAX_LEAD` ahead of the frame it shows; a cursor that stands still (the
+/// user scrubbed) does not hold it back.
+#[test]
+fn the_simulation_waits_for_the_viewer() {
+    use weft::app::session::{FOLLOWING, MAX_LEAD};
+    let session = state("hanging_sheet").session;
+    let id = session.status().run.recording_id;
+    let dt = session.status().preset.unwrap().solver.dt as f64;
+    let lead = (MAX_LEAD / dt).ceil() as u64;
+    session.pace_to_viewer();
+    // Before the viewer's first report, the simulation waits for it.
+    session.send(Command::Play);
+    assert!(session.wait_for(WAIT, |s| s.frame >= lead));
+    std::thread::sleep(FOLLOWING / 4);
+    assert!(
+        session.status().frame <= lead + 1,
+        "{}",
+        session.status().frame
+    );
+    // The viewer catches up: the simulation goes on, and waits again.
+    session.viewer_shows(id.clone(), BranchAt::Time(lead as f64 * dt));
+    assert!(session.wait_for(WAIT, |s| s.frame >= 2 * lead));
+    std::thread::sleep(FOLLOWING / 4);
+    assert!(
+        session.status().frame <= 2 * lead + 1,
+        "{}",
+        session.status().frame
+    );
+    // The user scrubs back: the simulation runs free.
+    session.viewer_shows(id.clone(), BranchAt::Time(0.0));
+    assert!(session.wait_for(WAIT, |s| s.frame > 4 * lead));
+    session.send(Command::Pause);
+}
+
+/// A new run (Reset, Load) starts its speed readouts from nothing.
+#[test]
+fn a_new_run_clears_the_speed_readouts() {
+    let session = state("hanging_sheet").session;
+    session.send(Command::Play);
+    assert!(session.wait_for(WAIT, |s| s.frame > 20 && s.steps_per_second > 0.0));
+    session.send(Command::Pause);
+    session.send(Command::Reset);
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let s = session.status();
+    assert_eq!((s.steps_per_second, s.step_ms), (0.0, 0.0));
+}
+
+/// `PlayTo` (what `weft gui --screenshot --frames N` sends) stops at N.
+#[test]
+fn play_to_stops_at_its_frame() {
+    let session = state("hanging_sheet").session;
+    session.send(Command::PlayTo(40));
+    assert!(session.wait_for(WAIT, |s| s.frame >= 40 && !s.playing));
+    std::thread::sleep(Duration::from_millis(200));
+    assert_eq!(session.status().frame, 40);
 }

@@ -50,6 +50,17 @@ fn the_window_shows_the_cloth_and_the_panel() {
         "weft gui --screenshot failed:\n{stderr}"
     );
     assert!(stderr.contains("saved the window"), "{stderr}");
+    // `--frames 300` plays exactly 300 frames, and the picture is of frame 300.
+    assert!(stderr.contains("at frame 300"), "{stderr}");
+    // While playing, the simulation waited for the viewer: the frame drawn
+    // was never more than half a second behind it.
+    let behind: f64 = stderr
+        .split("the view was at most ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no lag reported:\n{stderr}"));
+    assert!(behind <= 0.5, "the view was {behind} s behind:\n{stderr}");
     // Nothing for the viewer to pop up as a notification over the panel at
     // start: its layout arrives after the first frame (so the `sim_time`
     // timeline it names exists), and its memory-limit notice is filtered.
@@ -123,4 +134,113 @@ fn rust_log_is_honoured() {
     };
     assert!(run("debug").contains("DEBUG"));
     assert!(!run("warn").contains("DEBUG"));
+}
+
+/// Resident memory (bytes) and CPU time used so far (clock ticks) of
+/// process `pid`, from `/proc`.
+fn rss_and_ticks(pid: &str) -> Option<(u64, u64)> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let rss_kb: u64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmRSS:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // After the command name, in parentheses: state is field 3, utime and
+    // stime are fields 14 and 15.
+    let fields: Vec<&str> = stat.rsplit_once(')')?.1.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?;
+    Some((rss_kb * 1024, ticks))
+}
+
+/// The window left alone, paused at frame 0, costs nothing: it does not
+/// redraw, so its resident memory stays flat and it uses almost no CPU.
+#[test]
+fn an_idle_window_stays_flat_and_cheap() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let pid_file = dir.path().join("pid");
+    // The shell writes its pid and becomes weft, so the pid is weft's.
+    let script = format!(
+        "echo $$ > '{}'; exec '{}' gui flag_on_car",
+        pid_file.display(),
+        env!("CARGO_BIN_EXE_weft")
+    );
+    let mut child = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1600x1000x24", "sh", "-c", &script])
+        .env_remove("WAYLAND_DISPLAY")
+        // The window's saved state goes to the temporary directory.
+        .env("HOME", dir.path())
+        .env("XDG_DATA_HOME", dir.path())
+        .env("XDG_CONFIG_HOME", dir.path())
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+    let started = Instant::now();
+    let pid = loop {
+        if let Ok(p) = std::fs::read_to_string(&pid_file)
+            && !p.trim().is_empty()
+        {
+            break p.trim().to_string();
+        }
+        assert!(
+            started.elapsed() < Duration::from_secs(30),
+            "weft did not start"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let kill = |child: &mut std::process::Child| {
+        Command::new("kill").arg(&pid).status().ok();
+        child.wait().ok();
+    };
+    // Opening: the renderer compiles its shaders, the first run's static
+    // data and frame 0 arrive and are drawn.
+    std::thread::sleep(Duration::from_secs(15));
+    let Some((rss0, ticks0)) = rss_and_ticks(&pid) else {
+        kill(&mut child);
+        panic!("weft ended while opening");
+    };
+    let t0 = Instant::now();
+    let mut rss_max = rss0;
+    let mut last = (rss0, ticks0);
+    while t0.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_secs(2));
+        match rss_and_ticks(&pid) {
+            Some(now) => {
+                rss_max = rss_max.max(now.0);
+                last = now;
+            }
+            None => {
+                kill(&mut child);
+                panic!("weft ended while idle");
+            }
+        }
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    kill(&mut child);
+    let clock_ticks: f64 = Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
+        .unwrap_or(100.0);
+    let cpu = (last.1 - ticks0) as f64 / clock_ticks / seconds;
+    let grown = (rss_max.saturating_sub(rss0)) as f64 / 1e6;
+    eprintln!(
+        "idle for {seconds:.0} s: resident {:.0} MB → {:.0} MB (max {:.0} MB), CPU {:.1} % of a core",
+        rss0 as f64 / 1e6,
+        last.0 as f64 / 1e6,
+        rss_max as f64 / 1e6,
+        cpu * 100.0
+    );
+    assert!(
+        grown < 30.0,
+        "resident memory grew by {grown:.0} MB while idle"
+    );
+    assert!(cpu < 0.10, "{:.1} % of a core while idle", cpu * 100.0);
 }

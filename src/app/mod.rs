@@ -31,7 +31,7 @@ use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
 use crate::scene::{Override, load};
 use crate::telemetry::paths;
 use panel::Panel;
-use session::{Command, Session};
+use session::{BranchAt, Command, Session};
 
 /// `weft gui --screenshot`: play some frames, save the window, quit.
 #[derive(Clone, Debug)]
@@ -49,6 +49,7 @@ struct WeftScreenshot;
 /// Where `--screenshot` is: playing, waiting for the viewer to show the
 /// last frame, then waiting for egui's picture.
 enum Shot {
+    Start,
     Playing,
     Settling(u32),
     Requested,
@@ -60,6 +61,9 @@ pub struct WeftApp {
     panel: Panel,
     session: Session,
     screenshot: Option<(Screenshot, Shot, Instant)>,
+    /// With `--screenshot`: how far (simulated seconds) the viewer's time
+    /// cursor was at most behind the simulation while playing.
+    lag: f64,
 }
 
 impl eframe::App for WeftApp {
@@ -72,9 +76,9 @@ impl eframe::App for WeftApp {
             .default_size(340.0)
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
-        // The simulation runs on its own thread; keep showing its frames.
-        ui.ctx()
-            .request_repaint_after(std::time::Duration::from_millis(16));
+        // No repaint is asked for here: the session asks for one when its
+        // status changes, and the viewer when a message arrives, so a
+        // paused window with nobody at it does not redraw.
         self.take_screenshot(ui.ctx());
     }
 
@@ -85,7 +89,14 @@ impl eframe::App for WeftApp {
     /// With `--screenshot`, the window shows what it shows nobody pointing
     /// at it: wherever the display leaves the pointer (Xvfb, the middle of
     /// the screen), no tooltip opens over a plot.
-    fn raw_input_hook(&mut self, _ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+    ///
+    /// The simulation's keys that the viewer would take for its timeline
+    /// (Space, →, Backspace) are handed to the panel as its function keys
+    /// before the viewer sees them, unless a text field is being typed in.
+    fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        if !ctx.text_edit_focused() {
+            panel::take_simulation_keys(&mut raw_input.events);
+        }
         if self.screenshot.is_some() {
             raw_input
                 .events
@@ -107,13 +118,27 @@ impl WeftApp {
             std::process::exit(2);
         }
         match state {
+            Shot::Start => {
+                self.session.send(Command::PlayTo(shot.frames));
+                *state = Shot::Playing;
+            }
             Shot::Playing => {
                 let status = self.session.status();
-                if status.frame >= shot.frames {
-                    self.session.send(Command::Pause);
+                let link = self.panel.link();
+                let cursor = link.lock().expect("not poisoned").cursor.clone();
+                if let Some((id, at)) = cursor
+                    && id == status.run.recording_id
+                    && status.playing
+                {
+                    let dt = status.preset.as_ref().map_or(0.0, |p| p.solver.dt) as f64;
+                    let shown = match at {
+                        BranchAt::Frame(f) => f as f64 * dt,
+                        BranchAt::Time(t) => t,
+                    };
+                    self.lag = self.lag.max(status.time - shown);
+                }
+                if status.frame >= shot.frames && !status.playing {
                     *state = Shot::Settling(30);
-                } else if !status.playing {
-                    self.session.send(Command::Play);
                 }
             }
             Shot::Settling(0) => {
@@ -144,9 +169,12 @@ impl WeftApp {
                     let saved = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
                         .map(|img| img.save(&shot.path));
                     match saved {
-                        Some(Ok(())) => {
-                            eprintln!("saved the window ({w}×{h}) to {}", shot.path.display())
-                        }
+                        Some(Ok(())) => eprintln!(
+                            "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation",
+                            self.session.status().frame,
+                            shot.path.display(),
+                            self.lag
+                        ),
                         Some(Err(e)) => {
                             re_log::error!("cannot save {}: {e}", shot.path.display());
                             std::process::exit(2);
@@ -250,11 +278,15 @@ pub fn run(
                 re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
             );
             viewer.add_log_receiver(rx);
+            let ctx = cc.egui_ctx.clone();
+            session.set_waker(move || ctx.request_repaint());
+            session.pace_to_viewer();
             Ok(Box::new(WeftApp {
                 viewer,
                 panel,
                 session,
-                screenshot: screenshot.map(|s| (s, Shot::Playing, Instant::now())),
+                screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
+                lag: 0.0,
             }))
         }),
     )

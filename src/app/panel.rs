@@ -2,12 +2,17 @@
 //!
 //! Every edit is validated like a preset value before it reaches the
 //! session; a rejected value leaves the parameter as it was and shows the
-//! message. The panel holds only edit buffers; the session owns the scene.
-//! What the viewer reports (its time cursor, the particle selected in the
-//! 3D view) reaches the panel through a [`ViewerLink`].
+//! message in the status line at the top of the panel. A typed value is
+//! taken on Enter or when the field loses focus, never keystroke by
+//! keystroke; dragging a slider applies as it moves. The panel holds only
+//! edit buffers; the session owns the scene. What the viewer reports (its
+//! time cursor, the particle selected in the 3D view) reaches the panel
+//! through a [`ViewerLink`].
 //!
-//! Keyboard shortcuts (function keys, which the viewer leaves free; its own
-//! Space and arrows keep moving its timeline): [`SHORTCUTS`].
+//! Keyboard shortcuts: [`SHORTCUTS`]. The window hands Space, → and
+//! Backspace to the panel before the viewer sees them
+//! ([`take_simulation_keys`]); Ctrl+→ and the viewer's other keys stay its
+//! own.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -17,19 +22,76 @@ use egui::{Color32, Key, RichText, Slider, SliderClamping};
 use super::preset_diff;
 use super::session::{BranchAt, Command, Session, Status};
 use crate::scene::{
-    Override, Tuning, load,
+    Override, PresetError, Tuning, load,
     preset::{ColorBy, Level, Preset, TelemetrySettings, WindSection},
     shipped,
 };
 use crate::solver::{Family, Params, Width};
 
-/// The simulation's keyboard shortcuts: key, what it does.
-pub const SHORTCUTS: [(Key, &str); 4] = [
-    (Key::F6, "Play / Pause"),
-    (Key::F7, "Step"),
-    (Key::F8, "Branch"),
-    (Key::F9, "Reset"),
+/// The simulation's keyboard shortcuts: key, the key that does the same
+/// (taken from the viewer, which would use it for its timeline), what it
+/// does. The plain keys act only while no text field is being typed in.
+pub const SHORTCUTS: [(Key, Option<Key>, &str); 4] = [
+    (Key::F6, Some(Key::Space), "Play / Pause"),
+    (Key::F7, Some(Key::ArrowRight), "Step"),
+    (Key::F8, None, "Branch"),
+    (Key::F9, Some(Key::Backspace), "Reset"),
 ];
+
+/// Turns the simulation's plain keys (Space, →, Backspace, without
+/// modifiers) into its function keys (F6, F7, F9), so that the embedded
+/// viewer, which takes Space and the arrows for its timeline at the start
+/// of a frame, does not see them. The window calls it on each frame's raw
+/// input while no text field has the focus.
+pub fn take_simulation_keys(events: &mut [egui::Event]) {
+    for event in events {
+        if let egui::Event::Key { key, modifiers, .. } = event
+            && modifiers.is_none()
+            && let Some((f, _, _)) = SHORTCUTS.iter().find(|(_, k, _)| *k == Some(*key))
+        {
+            *key = *f;
+        }
+    }
+}
+
+/// A preset error as the panel shows it: the key once, the message and the
+/// hint (not the `--set …` source, which is the panel's own field).
+pub fn error_text(e: &PresetError) -> String {
+    let mut text = String::new();
+    if !e.source.starts_with("--set") {
+        text += &e.source;
+        if let Some((line, col)) = e.position {
+            text += &format!(":{line}:{col}");
+        }
+        text += ": ";
+    }
+    if let Some(key) = &e.key
+        && !e.message.contains(&format!("`{key}`"))
+    {
+        text += &format!("`{key}`: ");
+    }
+    text += &e.message;
+    if let Some(hint) = &e.hint {
+        text += &format!(" ({hint})");
+    }
+    text
+}
+
+/// A shortcut's keys as the panel names them: `F6 or Space`.
+fn keys_of(f: Key) -> String {
+    match SHORTCUTS.iter().find(|(k, _, _)| *k == f) {
+        Some((_, Some(plain), _)) => format!("{} or {}", f.name(), key_name(*plain)),
+        _ => f.name().to_string(),
+    }
+}
+
+/// A key's name in the panel's text (whose font has no arrow glyph).
+fn key_name(k: Key) -> &'static str {
+    match k {
+        Key::ArrowRight => "Right arrow",
+        k => k.name(),
+    }
+}
 
 /// What the embedded viewer last reported, written by its event callback.
 #[derive(Clone, Debug, Default)]
@@ -78,6 +140,12 @@ pub struct Panel {
     message: Option<(bool, String)>,
     branch_frame: u64,
     branch_at: Option<BranchAt>,
+    /// Whether the branch field had the keyboard focus last frame (it is
+    /// not overwritten while it is being typed in).
+    branch_editing: bool,
+    /// Whether the branch frame was typed: then it stays until the user
+    /// clears it (or branches), whatever the time cursor does.
+    branch_typed: bool,
     particle: usize,
     inspecting: bool,
     save_diff: bool,
@@ -110,6 +178,8 @@ impl Panel {
             message: None,
             branch_frame: 0,
             branch_at: None,
+            branch_editing: false,
+            branch_typed: false,
             particle: 0,
             inspecting: false,
             save_diff: load::load(&status.preset_name, &[]).is_ok(),
@@ -149,10 +219,12 @@ impl Panel {
         let status = session.status();
         self.shortcuts(ui.ctx(), session, &status);
         self.follow_viewer(session, &status);
+        ui.heading("weft");
+        self.status_line(ui, &status);
+        ui.separator();
         egui::ScrollArea::vertical()
             .auto_shrink([false, false])
             .show(ui, |ui| {
-                ui.heading("weft");
                 self.preset_ui(ui, session, &status);
                 ui.separator();
                 self.transport_ui(ui, session, &status);
@@ -172,18 +244,30 @@ impl Panel {
                 self.set_ui(ui, session, &status);
                 ui.separator();
                 self.files_ui(ui, session, &status);
-                if let Some(e) = &status.error {
-                    ui.colored_label(Color32::from_rgb(230, 80, 70), e);
-                }
-                if let Some((ok, text)) = &self.message {
-                    let colour = if *ok {
-                        Color32::from_rgb(110, 190, 110)
-                    } else {
-                        Color32::from_rgb(230, 80, 70)
-                    };
-                    ui.colored_label(colour, text);
-                }
             });
+    }
+
+    /// The status line, at the top of the panel whatever is scrolled: the
+    /// session's error (a solver failure, a refused branch, a file
+    /// problem), and the answer to the panel's last edit or action (a
+    /// rejected value in red).
+    fn status_line(&self, ui: &mut egui::Ui, status: &Status) {
+        let red = Color32::from_rgb(230, 80, 70);
+        if let Some(e) = &status.error {
+            ui.colored_label(red, e);
+        }
+        match &self.message {
+            Some((true, text)) => {
+                ui.colored_label(Color32::from_rgb(110, 190, 110), text);
+            }
+            Some((false, text)) => {
+                ui.colored_label(red, text);
+            }
+            None if status.error.is_none() => {
+                ui.weak("Space play/pause · Right arrow step · Backspace reset · F8 branch");
+            }
+            None => {}
+        }
     }
 
     fn preset_ui(&mut self, ui: &mut egui::Ui, session: &Session, status: &Status) {
@@ -225,13 +309,26 @@ impl Panel {
                 session.send(Command::Load(Box::new(loaded), name.clone()));
                 self.say(true, format!("loaded {name}"));
             }
-            Err(e) => self.say(false, e.to_string()),
+            Err(e) => self.say(false, error_text(&e)),
         }
     }
 
-    /// F6 play/pause, F7 step, F8 branch, F9 reset (see [`SHORTCUTS`]).
+    /// F6 or Space play/pause, F7 or Right arrow step, F8 branch, F9 or Backspace
+    /// reset (see [`SHORTCUTS`]); the plain keys only while no text field is
+    /// being typed in.
     fn shortcuts(&mut self, ctx: &egui::Context, session: &Session, status: &Status) {
-        let pressed = |key| ctx.input_mut(|i| i.consume_key(egui::Modifiers::NONE, key));
+        let typing = ctx.text_edit_focused();
+        let pressed = |f: Key| {
+            let plain = SHORTCUTS
+                .iter()
+                .find(|(k, _, _)| *k == f)
+                .and_then(|(_, plain, _)| *plain)
+                .filter(|_| !typing);
+            ctx.input_mut(|i| {
+                i.consume_key(egui::Modifiers::NONE, f)
+                    | plain.is_some_and(|k| i.consume_key(egui::Modifiers::NONE, k))
+            })
+        };
         if pressed(Key::F6) {
             session.send(if status.playing {
                 Command::Pause
@@ -259,9 +356,12 @@ impl Panel {
             if let Some((id, at)) = link.cursor
                 && id == status.run.recording_id
             {
-                self.branch_at = Some(at);
-                if let BranchAt::Frame(f) = at {
-                    self.branch_frame = f;
+                session.viewer_shows(id, at);
+                if !self.branch_typed {
+                    self.branch_at = Some(at);
+                    if let BranchAt::Frame(f) = at {
+                        self.branch_frame = f;
+                    }
                 }
             }
         }
@@ -279,27 +379,39 @@ impl Panel {
         let at = self.branch_at.unwrap_or(BranchAt::Frame(status.frame));
         session.send(Command::Branch(at));
         self.branch_at = None;
+        self.branch_typed = false;
     }
 
     fn transport_ui(&mut self, ui: &mut egui::Ui, session: &Session, status: &Status) {
         ui.horizontal(|ui| {
             if status.playing {
-                if ui.button("Pause").on_hover_text("Pause (F6)").clicked() {
+                if ui
+                    .button("Pause")
+                    .on_hover_text(format!("Pause ({})", keys_of(Key::F6)))
+                    .clicked()
+                {
                     session.send(Command::Pause);
                 }
-            } else if ui.button("Play").on_hover_text("Play (F6)").clicked() {
+            } else if ui
+                .button("Play")
+                .on_hover_text(format!("Play ({})", keys_of(Key::F6)))
+                .clicked()
+            {
                 session.send(Command::Play);
             }
             if ui
                 .button("Step")
-                .on_hover_text("Step one frame (F7)")
+                .on_hover_text(format!("Step one frame ({})", keys_of(Key::F7)))
                 .clicked()
             {
                 session.send(Command::Step);
             }
             if ui
                 .button("Reset")
-                .on_hover_text("Start over from frame 0 with the current tuning, as a new run (F9)")
+                .on_hover_text(format!(
+                    "Start over from frame 0 with the current tuning, as a new run ({})",
+                    keys_of(Key::F9)
+                ))
                 .clicked()
             {
                 session.send(Command::Reset);
@@ -308,15 +420,18 @@ impl Panel {
         ui.horizontal(|ui| {
             if ui
                 .button("Branch")
-                .on_hover_text(
-                    "A new run from this frame of the current one, with the current tuning (F8)",
-                )
+                .on_hover_text(format!(
+                    "A new run from this frame of the current one, with the current tuning ({})",
+                    keys_of(Key::F8)
+                ))
                 .clicked()
             {
                 self.branch(session, status);
             }
             ui.label("at frame");
             match self.branch_at {
+                // Being typed in: the text is the user's.
+                _ if self.branch_editing => {}
                 None => self.branch_frame = status.frame,
                 // Shown as a frame; the session finds the exact one.
                 Some(BranchAt::Time(t)) => {
@@ -325,19 +440,31 @@ impl Panel {
                 }
                 Some(BranchAt::Frame(_)) => {}
             }
-            if ui
-                .add(egui::DragValue::new(&mut self.branch_frame).range(0..=status.frame))
-                .changed()
-            {
+            // Not bounded by the run's frame: a frame past it is refused by
+            // the session, with the reason, rather than quietly clamped.
+            let field =
+                ui.add(egui::DragValue::new(&mut self.branch_frame).update_while_editing(false));
+            self.branch_editing = field.has_focus();
+            if field.changed() {
                 self.branch_at = Some(BranchAt::Frame(self.branch_frame));
+                self.branch_typed = true;
             }
-            if let Some(BranchAt::Time(t)) = self.branch_at {
+            if self.branch_typed {
+                if ui
+                    .small_button("clear")
+                    .on_hover_text("follow the current frame and the viewer's time cursor again")
+                    .clicked()
+                {
+                    self.branch_typed = false;
+                    self.branch_at = None;
+                }
+            } else if let Some(BranchAt::Time(t)) = self.branch_at {
                 ui.label(format!("(time cursor {t:.2} s)"));
             }
         });
         if ui
             .add(
-                Slider::new(&mut self.speed, 0.05..=4.0)
+                slider(&mut self.speed, 0.05..=4.0)
                     .logarithmic(true)
                     .text("speed ×"),
             )
@@ -425,7 +552,11 @@ impl Panel {
                 .checkbox(&mut self.inspecting, "inspect particle")
                 .changed();
             changed |= ui
-                .add(egui::DragValue::new(&mut self.particle).range(0..=n.saturating_sub(1)))
+                .add(
+                    egui::DragValue::new(&mut self.particle)
+                        .range(0..=n.saturating_sub(1))
+                        .update_while_editing(false),
+                )
                 .changed();
             if changed {
                 session.send(Command::Inspect(self.inspecting.then_some(self.particle)));
@@ -506,20 +637,16 @@ impl Panel {
             substeps,
         } = &mut self.tuning.solver;
         let free = SliderClamping::Never;
-        ui.add(
-            Slider::new(damping, 0.0..=1.0)
-                .clamping(free)
-                .text("k damping"),
-        );
+        ui.add(slider(damping, 0.0..=1.0).clamping(free).text("k damping"));
         for f in Family::BY_INDEX {
             ui.add(
-                Slider::new(&mut weights[f], 0.0..=1.0)
+                slider(&mut weights[f], 0.0..=1.0)
                     .clamping(free)
                     .text(format!("λ {}", f.name())),
             );
         }
         ui.add(
-            Slider::new(phi, 0.0..=std::f32::consts::PI)
+            slider(phi, 0.0..=std::f32::consts::PI)
                 .clamping(free)
                 .text("Φ cap (rad)"),
         );
@@ -534,24 +661,16 @@ impl Panel {
             }
             if let Width::Fixed(h) = h {
                 ui.add(
-                    Slider::new(h, 0.0..=0.1)
+                    slider(h, 0.0..=0.1)
                         .logarithmic(true)
                         .clamping(free)
                         .text("h"),
                 );
             }
         });
-        ui.add(
-            Slider::new(iterations, 1..=50)
-                .clamping(free)
-                .text("iterations"),
-        );
-        ui.add(Slider::new(dt, 0.001..=0.05).clamping(free).text("Δt (s)"));
-        ui.add(
-            Slider::new(substeps, 1..=32)
-                .clamping(free)
-                .text("substeps"),
-        );
+        ui.add(slider(iterations, 1..=50).clamping(free).text("iterations"));
+        ui.add(slider(dt, 0.001..=0.05).clamping(free).text("Δt (s)"));
+        ui.add(slider(substeps, 1..=32).clamping(free).text("substeps"));
         self.commit(session, before);
     }
 
@@ -571,12 +690,12 @@ impl Panel {
                 (&mut velocity.y, "y "),
                 (&mut velocity.z, "z "),
             ] {
-                ui.add(egui::DragValue::new(v).speed(0.1).prefix(axis));
+                ui.add(drag(v).speed(0.1).prefix(axis));
             }
         });
-        ui.add(Slider::new(gust, 0.0..=20.0).text("gust (m/s)"));
-        ui.add(Slider::new(gust_period, 0.0..=10.0).text("gust period (s)"));
-        ui.add(Slider::new(sway, 0.0..=90.0).text("sway (°)"));
+        ui.add(slider(gust, 0.0..=20.0).text("gust (m/s)"));
+        ui.add(slider(gust_period, 0.0..=10.0).text("gust period (s)"));
+        ui.add(slider(sway, 0.0..=90.0).text("sway (°)"));
         self.commit(session, before);
     }
 
@@ -606,7 +725,7 @@ impl Panel {
                 }
             });
         ui.add(
-            egui::DragValue::new(log_every)
+            drag(log_every)
                 .range(1..=1000)
                 .prefix("log every ")
                 .suffix(" frames"),
@@ -618,11 +737,11 @@ impl Panel {
             }
         });
         ui.add(
-            Slider::new(arrow_scale, 0.1..=500.0)
+            slider(arrow_scale, 0.1..=500.0)
                 .logarithmic(true)
                 .text("arrow scale"),
         );
-        ui.add(Slider::new(arrow_threshold, 0.0..=0.01).text("arrow threshold"));
+        ui.add(slider(arrow_threshold, 0.0..=0.01).text("arrow threshold"));
         if self.telemetry != before {
             session.send(Command::Telemetry(self.telemetry));
         }
@@ -655,7 +774,7 @@ impl Panel {
             return;
         };
         match load::with_overrides(current, std::slice::from_ref(&o)) {
-            Err(e) => self.say(false, e.to_string()),
+            Err(e) => self.say(false, error_text(&e)),
             Ok(loaded) => {
                 let live = Tuning::is_live(&o.key) || o.key.starts_with("telemetry.");
                 self.sync(&loaded.preset);
@@ -730,6 +849,21 @@ impl Panel {
             Err(e) => self.say(false, format!("saved {path}, but it does not load: {e}")),
         }
     }
+}
+
+/// A slider whose value, typed, is taken on Enter or when the field loses
+/// focus (dragging still applies as it moves).
+fn slider<Num: egui::emath::Numeric>(
+    value: &mut Num,
+    range: std::ops::RangeInclusive<Num>,
+) -> Slider<'_> {
+    Slider::new(value, range).update_while_editing(false)
+}
+
+/// A number field whose value, typed, is taken on Enter or when it loses
+/// focus.
+fn drag<Num: egui::emath::Numeric>(value: &mut Num) -> egui::DragValue<'_> {
+    egui::DragValue::new(value).update_while_editing(false)
 }
 
 /// A figure as a person reads it: four decimals in the usual range,

@@ -38,6 +38,8 @@ use worker::Worker;
 pub enum Command {
     /// Run in real time (times the speed).
     Play,
+    /// Play until this frame, then pause there (`weft gui --screenshot`).
+    PlayTo(u64),
     /// Stop stepping.
     Pause,
     /// Step one frame (pauses).
@@ -61,6 +63,16 @@ pub enum Command {
     Branch(BranchAt),
     /// Which particle the inspector follows.
     Inspect(Option<usize>),
+}
+
+/// What the viewer last showed, for pacing the simulation to it.
+#[derive(Default)]
+pub(crate) struct Shown {
+    /// Whether the simulation waits for the viewer (a window has one).
+    pub(crate) pace: bool,
+    /// The recording id, where the viewer's time cursor was, and when it
+    /// moved there.
+    pub(crate) at: Option<(String, BranchAt, Instant)>,
 }
 
 /// Where a branch starts.
@@ -154,10 +166,16 @@ pub struct Status {
     pub error: Option<String>,
 }
 
+/// Called by the simulation thread whenever the [`Status`] changes (the
+/// window asks egui for a repaint: nothing else repaints it while paused).
+pub type Waker = Arc<dyn Fn() + Send + Sync>;
+
 /// The handle the panel holds.
 pub struct Session {
     tx: Sender<Command>,
     status: Arc<Mutex<Status>>,
+    waker: Arc<Mutex<Option<Waker>>>,
+    shown: Arc<Mutex<Shown>>,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -174,7 +192,16 @@ impl Session {
             speed: 1.0,
             ..Status::default()
         }));
-        let worker = Worker::new(loaded, name, Arc::new(forward), status.clone())?;
+        let waker: Arc<Mutex<Option<Waker>>> = Arc::default();
+        let shown: Arc<Mutex<Shown>> = Arc::default();
+        let worker = Worker::new(
+            loaded,
+            name,
+            Arc::new(forward),
+            status.clone(),
+            waker.clone(),
+            shown.clone(),
+        )?;
         let (tx, rx) = channel();
         let thread = std::thread::Builder::new()
             .name("weft-sim".into())
@@ -183,8 +210,38 @@ impl Session {
         Ok(Self {
             tx,
             status,
+            waker,
+            shown,
             thread: Some(thread),
         })
+    }
+
+    /// Has the simulation wait for the viewer (see [`Session::viewer_shows`]);
+    /// the window does, a session without a viewer does not.
+    pub fn pace_to_viewer(&self) {
+        self.shown.lock().expect("not poisoned").pace = true;
+    }
+
+    /// Notes where the viewer's time cursor is on recording `recording`
+    /// (reported each time it moves). While it moves forward, following the
+    /// stream, a paced simulation keeps no more than [`MAX_LEAD`] seconds
+    /// ahead of it: it never runs ahead of what the viewer can take in and
+    /// draw. A cursor moved back (the user scrubbed) or standing still for
+    /// [`FOLLOWING`] (the viewer's timeline paused) does not hold it back.
+    pub fn viewer_shows(&self, recording: String, at: BranchAt) {
+        let mut shown = self.shown.lock().expect("not poisoned");
+        let back = match (&shown.at, at) {
+            (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
+            (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
+            _ => false,
+        };
+        shown.at = (!back).then(|| (recording, at, Instant::now()));
+    }
+
+    /// Has the simulation thread call `waker` after every change of the
+    /// status (a step, a command handled, an error).
+    pub fn set_waker(&self, waker: impl Fn() + Send + Sync + 'static) {
+        *self.waker.lock().expect("not poisoned") = Some(Arc::new(waker));
     }
 
     /// Sends a command; it is handled before the next step.
@@ -227,6 +284,14 @@ impl Drop for Session {
         }
     }
 }
+
+/// How far (simulated seconds) the simulation may run ahead of the frame
+/// the viewer shows while the viewer follows it.
+pub const MAX_LEAD: f64 = 0.25;
+
+/// A viewer cursor that has not moved for this long is not following the
+/// stream (see [`Session::viewer_shows`]).
+pub const FOLLOWING: Duration = Duration::from_secs(2);
 
 /// `ok`, or `FAIL: expect.max_strain, …` (empty without bounds).
 pub fn verdict_text(checks: &[Check]) -> String {

@@ -15,7 +15,10 @@ use crate::solver::{Family, PerFamily};
 use crate::telemetry::Collect;
 
 use super::runs::{Forward, SERIES_VALUES, Start, Tee, open};
-use super::{BranchAt, Command, ParticleReadout, RunInfo, Series, Status, verdict_text};
+use super::{
+    BranchAt, Command, FOLLOWING, MAX_LEAD, ParticleReadout, RunInfo, Series, Shown, Status, Waker,
+    verdict_text,
+};
 
 /// What the simulation thread owns: the current run and its history, every
 /// run of the session, the stream of the current one, and the pacing.
@@ -34,7 +37,11 @@ pub(super) struct Worker {
     /// The file the current run is recorded to, if any.
     recording: Option<PathBuf>,
     status: Arc<Mutex<Status>>,
+    waker: Arc<Mutex<Option<Waker>>>,
+    shown: Arc<Mutex<Shown>>,
     playing: bool,
+    /// While playing, the frame to pause at.
+    stop_at: Option<u64>,
     speed: f32,
     next_step: Instant,
     recent: std::collections::VecDeque<Instant>,
@@ -46,6 +53,8 @@ impl Worker {
         name: String,
         forward: Forward,
         status: Arc<Mutex<Status>>,
+        waker: Arc<Mutex<Option<Waker>>>,
+        shown: Arc<Mutex<Shown>>,
     ) -> Result<Self, String> {
         let base = load::load(&name, &[]).ok().map(|l| l.preset);
         let opened = open(
@@ -74,7 +83,10 @@ impl Worker {
             inspect: None,
             recording: None,
             status,
+            waker,
+            shown,
             playing: false,
+            stop_at: None,
             speed: 1.0,
             next_step: Instant::now(),
             recent: Default::default(),
@@ -105,7 +117,17 @@ impl Worker {
             for c in pending {
                 self.handle(c);
             }
-            if self.playing {
+            if self.playing && self.stop_at.is_some_and(|f| self.run.scene.frame() >= f) {
+                self.playing = false;
+                self.stop_at = None;
+                self.publish_progress();
+            }
+            if self.playing && self.viewer_behind() {
+                // Wait for the viewer; then go on at the usual pace, without
+                // catching up.
+                std::thread::sleep(Duration::from_millis(2));
+                self.next_step = Instant::now();
+            } else if self.playing {
                 let now = Instant::now();
                 if now >= self.next_step {
                     self.step();
@@ -130,7 +152,15 @@ impl Worker {
         match c {
             Command::Play => {
                 self.playing = true;
+                self.stop_at = None;
                 self.next_step = Instant::now();
+                self.await_viewer();
+            }
+            Command::PlayTo(frame) => {
+                self.playing = self.run.scene.frame() < frame;
+                self.stop_at = Some(frame);
+                self.next_step = Instant::now();
+                self.await_viewer();
             }
             Command::Pause => self.playing = false,
             Command::Step => {
@@ -192,6 +222,41 @@ impl Worker {
             }
         }
         self.publish();
+    }
+
+    /// Whether the viewer, following the current run, shows a frame more
+    /// than [`MAX_LEAD`] seconds behind the simulation's.
+    fn viewer_behind(&self) -> bool {
+        let shown = self.shown.lock().expect("not poisoned");
+        let Some((id, at, when)) = shown.at.as_ref().filter(|_| shown.pace) else {
+            return false;
+        };
+        if *id != self.info.recording_id || when.elapsed() > FOLLOWING {
+            return false;
+        }
+        let frame = match *at {
+            BranchAt::Frame(f) => f,
+            BranchAt::Time(t) => self.history.frame_at(t),
+        };
+        let dt = self.run.scene.solver().params().dt as f64;
+        self.run.scene.frame().saturating_sub(frame) as f64 * dt > MAX_LEAD
+    }
+
+    /// On Play, if the viewer has not reported the current run lately: takes
+    /// it to show the current frame, so that the simulation waits (up to
+    /// [`FOLLOWING`]) for its first report instead of running ahead.
+    fn await_viewer(&self) {
+        let mut shown = self.shown.lock().expect("not poisoned");
+        let current = shown.at.as_ref().is_some_and(|(id, _, when)| {
+            *id == self.info.recording_id && when.elapsed() < FOLLOWING
+        });
+        if shown.pace && !current {
+            shown.at = Some((
+                self.info.recording_id.clone(),
+                BranchAt::Frame(self.run.scene.frame()),
+                Instant::now(),
+            ));
+        }
     }
 
     /// Has the run collect what the panel reads after every step, whatever
@@ -281,6 +346,9 @@ impl Worker {
                     self.series.clear();
                 }
                 self.tee = opened.tee;
+                // The speed readouts are the new run's.
+                self.recent.clear();
+                self.status.lock().expect("not poisoned").step_ms = 0.0;
                 let old = std::mem::replace(&mut self.rec, opened.rec);
                 let flushed = old.flush_blocking();
                 self.run = opened.run;
@@ -379,6 +447,15 @@ impl Worker {
 
     fn set_error(&self, e: Option<String>) {
         self.status.lock().expect("not poisoned").error = e;
+        self.wake();
+    }
+
+    /// Tells the window that the status changed.
+    fn wake(&self) {
+        let waker = self.waker.lock().expect("not poisoned").clone();
+        if let Some(waker) = waker {
+            waker();
+        }
     }
 
     /// Publishes everything, the preset included (after a command).
@@ -394,12 +471,15 @@ impl Worker {
         s.runs = self.runs.clone();
         s.recording = self.recording.clone();
         progress.write(&mut s);
+        drop(s);
+        self.wake();
     }
 
     /// Publishes what a step changes (the preset does not change on a step).
     fn publish_progress(&self) {
         let progress = self.progress();
         progress.write(&mut self.status.lock().expect("not poisoned"));
+        self.wake();
     }
 
     fn progress(&self) -> Progress {
