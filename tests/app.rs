@@ -37,7 +37,7 @@ fn state_with(preset: &str, sets: &[&str]) -> State {
 
 fn harness(state: State) -> Harness<'static, State> {
     Harness::builder()
-        .with_size([360.0, 1300.0])
+        .with_size([360.0, 1400.0])
         .build_ui_state(|ui, s: &mut State| s.panel.ui(ui, &s.session), state)
 }
 
@@ -229,7 +229,7 @@ fn saving_a_preset_loads_back_identically() {
 #[test]
 fn panel_snapshot() {
     let mut h = Harness::builder()
-        .with_size([360.0, 1300.0])
+        .with_size([360.0, 1400.0])
         .wgpu()
         .build_ui_state(
             |ui, s: &mut State| s.panel.ui(ui, &s.session),
