@@ -206,6 +206,8 @@ pub(crate) struct SelfContacts {
     pub(super) watch: u32,
     /// Whether this substep does.
     pub(super) leaving: bool,
+    /// Whether tangles were found where they were last looked for.
+    pub(super) tangles_left: bool,
 }
 
 /// The positions and orientations a contact search reads.

@@ -142,6 +142,7 @@ impl SelfContacts {
                 tangled[k as usize] = true;
             }
         });
+        self.tangles_left = count > 0;
         count
     }
 
@@ -153,9 +154,11 @@ impl SelfContacts {
 
     /// Whether this substep leaves tangled particles out of the contacts:
     /// while a watch is on ([`SelfContacts::watch_for_tangles`]; this call
-    /// counts one substep of it).
+    /// counts one substep of it), and after it for as long as tangles are
+    /// still found (a tangle a jerk made is left to come apart, however long
+    /// that takes, rather than held by contacts that keep the wrong sides).
     pub(crate) fn leave_tangles_this_substep(&mut self) -> bool {
-        self.leaving = self.watch > 0;
+        self.leaving = self.watch > 0 || (self.leaving && self.tangles_left);
         self.watch = self.watch.saturating_sub(1);
         self.leaving
     }
