@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::{Foot, SelfContacts, Triangle, bounds};
-use crate::solver::broad_phase::{NearTriangles, SpatialHash};
+use crate::solver::broad_phase::{GROUP, NearTriangles, SpatialHash};
 use crate::solver::cloth::ClothSpec;
 use crate::solver::topology::Topology;
 
@@ -207,23 +207,35 @@ fn scan_crossings(
     if near.is_none() {
         hash.build(x, crossing_cell(spec));
     }
-    for (k, &tri) in triangles.iter().enumerate() {
-        let Some(mut t) = TriangleCrossing::new(x, tri) else {
+    // A grid cell's two triangles (a group of the near pairs) share one
+    // query over the union of their grown boxes.
+    let pad = Vec3::splat(grow);
+    for (g, tris) in triangles.chunks(GROUP).enumerate() {
+        let mut ts = tris.iter().map(|&tri| TriangleCrossing::new(x, tri));
+        let mut ts: [Option<TriangleCrossing>; GROUP] =
+            std::array::from_fn(|_| ts.next().flatten());
+        let Some((lo, hi)) = ts
+            .iter()
+            .flatten()
+            .map(|t| (t.lo, t.hi))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        else {
             continue;
         };
-        let (lo, hi) = (t.lo - Vec3::splat(grow), t.hi + Vec3::splat(grow));
         let mut visit = |p: u32| {
             if half[p as usize] > grow {
                 return; // in the pass below
             }
             let xp = x[p as usize];
-            if xp.cmpge(lo).all() && xp.cmple(hi).all() {
-                t.edges_from(p, x, spec, &mut crossing);
+            for t in ts.iter_mut().flatten() {
+                if xp.cmpge(t.lo - pad).all() && xp.cmple(t.hi + pad).all() {
+                    t.edges_from(p, x, spec, &mut crossing);
+                }
             }
         };
         match near {
-            Some(n) => n.of(k).iter().copied().for_each(&mut visit),
-            None => hash.query(lo, hi, &mut visit),
+            Some(n) => n.of_group(g).iter().copied().for_each(&mut visit),
+            None => hash.query(lo - pad, hi + pad, &mut visit),
         }
     }
     let far: Vec<u32> = (0..x.len() as u32)
