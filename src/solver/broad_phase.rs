@@ -104,6 +104,7 @@ impl NearTriangles {
 
     /// The particles near triangle `t` (those of its group), in ascending
     /// order.
+    #[cfg(test)]
     pub(crate) fn of(&self, t: usize) -> &[u32] {
         self.of_group(t / GROUP)
     }
