@@ -2,7 +2,8 @@
 //! plots of violations, self-collision's crossings, strain, the normals
 //! against the surface, energy and timings.
 //!
-//! [`default`] is what a recording opens with (`weft record`, `weft sweep`).
+//! [`send_default`] writes what a recording opens with (`weft record`,
+//! `weft sweep`): [`default`]'s views, the plots without legends.
 //! The desktop debugger sends [`send_desktop`]: the same views, with the
 //! viewer's side panels collapsed and view settings that Rerun's Rust
 //! blueprint builder has no setter for (the 3D view's camera following the
@@ -21,7 +22,8 @@ use rerun::{RecordingStream, RecordingStreamResult};
 
 use super::paths;
 
-/// The layout a recording opens with.
+/// The layout a recording opens with: its views (the legends, which
+/// Rerun's builder cannot hide, are hidden by [`send_default`]).
 pub fn default() -> Blueprint {
     layout(Views::new(false)).0
 }
@@ -130,15 +132,28 @@ pub fn desktop_messages(
     application_id: &rerun::ApplicationId,
     activation: BlueprintActivation,
 ) -> RecordingStreamResult<Vec<LogMsg>> {
-    let (blueprint, extras) = layout(Views::new(true));
-    let blueprint = blueprint
-        .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
-        .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
-        .with_time_panel(
-            TimePanel::new()
-                .with_timeline(paths::SIM_TIME)
-                .with_state(PanelState::Collapsed),
-        );
+    messages(application_id, activation, true)
+}
+
+/// The messages of [`default`]'s layout, with the plots' legends hidden
+/// (or, for the desktop debugger, of [`desktop_messages`]'s), ending with
+/// the activation command.
+fn messages(
+    application_id: &rerun::ApplicationId,
+    activation: BlueprintActivation,
+    desktop: bool,
+) -> RecordingStreamResult<Vec<LogMsg>> {
+    let (mut blueprint, extras) = layout(Views::new(desktop));
+    if desktop {
+        blueprint = blueprint
+            .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
+            .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
+            .with_time_panel(
+                TimePanel::new()
+                    .with_timeline(paths::SIM_TIME)
+                    .with_state(PanelState::Collapsed),
+            );
+    }
     // The blueprint's messages, as Rerun's builder writes them.
     let (mem, storage) = rerun::RecordingStreamBuilder::new(application_id.clone()).memory()?;
     blueprint.send(&mem, activation)?;
@@ -160,29 +175,31 @@ pub fn desktop_messages(
         .blueprint()
         .memory()?;
     bp.set_time_sequence("blueprint", 0);
-    bp.log(
-        format!("{}/EyeControls3D", extras.cloth),
-        &EyeControls3D::new().with_tracking_entity(paths::PARTICLES),
-    )?;
-    for entity in NOT_PICKED {
+    if desktop {
+        bp.log(
+            format!("{}/EyeControls3D", extras.cloth),
+            &EyeControls3D::new().with_tracking_entity(paths::PARTICLES),
+        )?;
+        for entity in NOT_PICKED {
+            bp.log(
+                format!(
+                    "{}/ViewContents/overrides/{entity}/visualizers",
+                    extras.cloth
+                ),
+                &EntityBehavior::new().with_interactive(false),
+            )?;
+        }
         bp.log(
             format!(
-                "{}/ViewContents/overrides/{entity}/visualizers",
-                extras.cloth
+                "{}/ViewContents/overrides/{}/visualizers",
+                extras.cloth,
+                paths::NORMALS
             ),
-            &EntityBehavior::new().with_interactive(false),
+            &EntityBehavior::new()
+                .with_interactive(false)
+                .with_visible(false),
         )?;
     }
-    bp.log(
-        format!(
-            "{}/ViewContents/overrides/{}/visualizers",
-            extras.cloth,
-            paths::NORMALS
-        ),
-        &EntityBehavior::new()
-            .with_interactive(false)
-            .with_visible(false),
-    )?;
     for plot in &extras.plots {
         bp.log(
             format!("{plot}/PlotLegend"),
@@ -204,11 +221,33 @@ pub fn send_desktop(
     rec: &RecordingStream,
     activation: BlueprintActivation,
 ) -> RecordingStreamResult<()> {
+    send(rec, activation, true)
+}
+
+/// Sends [`default`]'s layout into `rec` as its default (what a viewer
+/// opens it with), with the plots' legends hidden: what `weft record` and
+/// `weft sweep` write at the start of a recording.
+pub fn send_default(rec: &RecordingStream) -> RecordingStreamResult<()> {
+    let activation = BlueprintActivation {
+        make_active: false,
+        make_default: true,
+    };
+    send(rec, activation, false)
+}
+
+fn send(
+    rec: &RecordingStream,
+    activation: BlueprintActivation,
+    desktop: bool,
+) -> RecordingStreamResult<()> {
+    if !rec.is_enabled() {
+        return Ok(());
+    }
     let app = rec
         .store_info()
         .map(|i| i.application_id().clone())
         .unwrap_or_else(|| "weft".into());
-    let mut msgs = desktop_messages(&app, activation)?;
+    let mut msgs = messages(&app, activation, desktop)?;
     if let Some(LogMsg::BlueprintActivationCommand(cmd)) = msgs.pop() {
         rec.send_blueprint(msgs, cmd);
     }
