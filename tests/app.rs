@@ -240,8 +240,9 @@ fn panel_snapshot() {
 }
 
 /// A session opened at level `summary` and switched to `full` from the
-/// panel draws the corrections from then on: the app keeps every particle's
-/// corrections whatever level it starts at.
+/// panel draws the corrections once its arrows are turned on (they start
+/// off in the window): the app keeps every particle's corrections whatever
+/// level it starts at.
 #[test]
 fn switching_to_level_full_draws_the_corrections() {
     let dir = tempfile::tempdir().unwrap();
@@ -254,7 +255,11 @@ fn switching_to_level_full_draws_the_corrections() {
     session.send(Command::StartRecording(file.clone()));
     assert!(session.wait_for(WAIT, |s| s.recording.is_some()));
     session.send(Command::Telemetry(full));
-    for frame in 1..=3 {
+    // The window starts with the arrows off: frame 1 draws none.
+    session.send(Command::Step);
+    assert!(session.wait_for(WAIT, |s| s.frame == 1));
+    session.send(Command::Arrows(true));
+    for frame in 2..=3 {
         session.send(Command::Step);
         assert!(session.wait_for(WAIT, |s| s.frame == frame));
     }
@@ -634,6 +639,49 @@ fn the_inspector_shows_the_selected_particle() {
     assert!(!components.contains("dtheta_stretch"), "{components:?}");
 }
 
+/// A click on the cloth's mesh (not on a particle) inspects the particle
+/// nearest the clicked point, and the panel's particle field follows.
+#[test]
+fn a_click_on_the_mesh_inspects_the_nearest_particle() {
+    let s = state("flag_on_car");
+    let link = s.panel.link();
+    let mut h = harness(s);
+    h.run();
+    let status = h.state().session.status();
+    let preset = status.preset.clone().unwrap();
+    let weft_n = preset.cloth.weft as usize;
+    // At frame 0 the cloth is where the preset places it.
+    let scene = weft::scene::Scene::new(&preset).unwrap();
+    let x = scene.world_positions();
+    // A point on the mesh a third of the way from the free tip (the last
+    // particle of the first row) to its neighbour along the row.
+    let tip = weft_n - 1;
+    let at = x[tip] + (x[tip - 1] - x[tip]) / 3.0;
+    link.lock()
+        .unwrap()
+        .pick(status.run.recording_id.clone(), at.to_array());
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.particle.as_ref().is_some_and(|p| p.index == tip)
+    }));
+    h.run();
+    h.run();
+    h.get_by_label_contains(&format!("(i, j) = ({tip}, 0)"));
+    // The other neighbour's side picks it.
+    let next = tip - 1;
+    let at = x[next] + (x[next - 1] - x[next]) / 3.0;
+    link.lock()
+        .unwrap()
+        .pick(status.run.recording_id, at.to_array());
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| {
+        s.particle.as_ref().is_some_and(|p| p.index == next)
+    }));
+    h.run();
+    h.run();
+    h.get_by_label_contains(&format!("(i, j) = ({next}, 0)"));
+}
+
 /// The panel shows each [expect] bound with the run's value and ok/FAIL,
 /// live, and starts over with the run.
 #[test]
@@ -836,6 +884,24 @@ fn viewer_events_reach_the_panel() {
     };
     weft::app::on_viewer_event(&link, click(paths::MESH, 3));
     assert_eq!(link.lock().unwrap().selected, None, "not a particle");
+    assert_eq!(link.lock().unwrap().picked_at, None, "no point");
+    // A click on the mesh where the viewer knows the point: the panel
+    // picks the particle nearest it.
+    weft::app::on_viewer_event(
+        &link,
+        event(ViewerEventKind::SelectionChange {
+            items: vec![SelectionChangeItem::Entity {
+                entity_path: EntityPath::from(paths::MESH),
+                instance_id: Instance::ALL,
+                view_name: Some("Cloth".into()),
+                position: Some(glam::Vec3::new(1.0, 2.0, 3.0)),
+            }],
+        }),
+    );
+    assert_eq!(
+        link.lock().unwrap().picked_at,
+        Some(("rec_1".to_string(), [1.0, 2.0, 3.0]))
+    );
     weft::app::on_viewer_event(&link, click(paths::PARTICLES, 23));
     assert_eq!(
         link.lock().unwrap().selected,

@@ -814,3 +814,40 @@ fn a_bad_crossing_bound_is_refused_with_its_range() {
         assert!(err.contains(says), "{set}: {err}");
     }
 }
+
+/// A recording opens with weft's layout as its default, the plots without
+/// legends (Rerun's builder cannot hide them; the layout is sent as
+/// messages), six of them: the crossing count has a plot of its own.
+#[test]
+fn a_recording_carries_its_layout() {
+    use rerun::external::re_log_encoding::DecoderApp;
+    use rerun::log::LogMsg;
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("r.rrd");
+    let out = weft()
+        .args(["record", "hanging_sheet", "--frames", "2", "--save"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reader = std::io::BufReader::new(std::fs::File::open(&file).unwrap());
+    let mut legends = 0;
+    let mut activation = None;
+    for msg in DecoderApp::decode_eager(reader).unwrap() {
+        match msg.unwrap() {
+            LogMsg::ArrowMsg(id, arrow) if id.is_blueprint() => {
+                let chunk = rerun::log::Chunk::from_arrow_msg(&arrow).unwrap();
+                legends += chunk.entity_path().to_string().ends_with("/PlotLegend") as usize;
+            }
+            LogMsg::BlueprintActivationCommand(cmd) => activation = Some(cmd),
+            _ => {}
+        }
+    }
+    assert_eq!(legends, 6, "one legend setting per plot");
+    let activation = activation.expect("the layout is activated");
+    assert!(activation.make_default && !activation.make_active);
+}

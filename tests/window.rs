@@ -72,13 +72,11 @@ fn the_window_shows_the_cloth_and_the_panel() {
 
     // The 3D view (left of the plots): the cloth, on the scene's ground and
     // car, 5 s and some 40 m down the road, so the view has followed them
-    // (a camera fixed on the start saw an empty ground by then). At level
-    // `full` its particles carry the families' correction arrows, in
-    // strongly saturated colours (as is the strain ramp), where the ground,
-    // the car and the sky are greys of saturation below 50. The cloth's
-    // colours change with its state at the captured frame, which the
-    // simulation thread does not wait for; their saturation does not (a
-    // share of 0.014-0.016 in the captures seen; 0 with the camera fixed).
+    // (a camera fixed on the start saw an empty ground by then). The
+    // camera tracks the cloth, which fills most of the view: its shaded
+    // sand mesh and strain-coloured dots are strongly saturated, where the
+    // ground, the car and the sky are greys of saturation below 50 (the
+    // correction arrows are off in the window).
     let view = ((0.15, 0.38), (0.07, 0.66));
     let cloth = share(&img, view.0, view.1, |[r, g, b, _]| {
         r.max(g).max(b) - r.min(g).min(b) > 70

@@ -193,7 +193,9 @@ impl WeftApp {
 }
 
 /// What the viewer reports, passed on to the panel: the time cursor and
-/// timeline, and a particle selected in the 3D view.
+/// timeline, and a particle selected in the 3D view, or the point where
+/// the cloth's mesh was clicked (the panel inspects the particle nearest
+/// it).
 pub fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: ViewerEvent) {
     let recording = event.recording_id.to_string();
     let mut link = link.lock().expect("not poisoned");
@@ -208,16 +210,22 @@ pub fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: Viewer
         ViewerEventKind::TimeUpdate { time } => link.time(recording, time.as_f64()),
         ViewerEventKind::SelectionChange { items } => {
             let particles = re_viewer::external::re_log_types::EntityPath::from(paths::PARTICLES);
+            let mesh = re_viewer::external::re_log_types::EntityPath::from(paths::MESH);
             for item in items {
                 if let SelectionChangeItem::Entity {
                     entity_path,
                     instance_id,
+                    position,
                     ..
                 } = item
-                    && entity_path == particles
-                    && !instance_id.is_all()
                 {
-                    link.select(recording.clone(), instance_id.get() as usize);
+                    if entity_path == particles && !instance_id.is_all() {
+                        link.select(recording.clone(), instance_id.get() as usize);
+                    } else if entity_path == mesh
+                        && let Some(at) = position
+                    {
+                        link.pick(recording.clone(), at.to_array());
+                    }
                 }
             }
         }

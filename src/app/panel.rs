@@ -105,6 +105,9 @@ pub struct ViewerLink {
     pub cursor_moves: u64,
     /// The recording id and index of the particle selected in the 3D view.
     pub selected: Option<(String, usize)>,
+    /// The recording id and the point (world coordinates) of a click on
+    /// the cloth's mesh in the 3D view, for picking the nearest particle.
+    pub picked_at: Option<(String, [f32; 3])>,
     /// Bumped at every selection.
     pub selections: u64,
 }
@@ -124,6 +127,14 @@ impl ViewerLink {
     /// Notes a particle selected in recording `recording`.
     pub fn select(&mut self, recording: String, particle: usize) {
         self.selected = Some((recording, particle));
+        self.picked_at = None;
+        self.selections += 1;
+    }
+
+    /// Notes a click on the cloth's mesh at `at` in recording `recording`.
+    pub fn pick(&mut self, recording: String, at: [f32; 3]) {
+        self.picked_at = Some((recording, at));
+        self.selected = None;
         self.selections += 1;
     }
 }
@@ -132,6 +143,8 @@ impl ViewerLink {
 pub struct Panel {
     tuning: Tuning,
     telemetry: TelemetrySettings,
+    /// Whether the correction arrows are drawn (off at start).
+    arrows: bool,
     speed: f32,
     open: String,
     save_path: String,
@@ -150,7 +163,7 @@ pub struct Panel {
     inspecting: bool,
     save_diff: bool,
     link: Arc<Mutex<ViewerLink>>,
-    seen: (u64, u64),
+    seen: (u64, u64, u64),
 }
 
 impl Panel {
@@ -170,6 +183,7 @@ impl Panel {
         let mut p = Self {
             tuning: Tuning::of(&preset),
             telemetry: preset.telemetry,
+            arrows: false,
             speed: 1.0,
             open: status.preset_name.clone(),
             save_path: format!("{stem}_tuned.toml"),
@@ -184,7 +198,7 @@ impl Panel {
             inspecting: false,
             save_diff: load::load(&status.preset_name, &[]).is_ok(),
             link: Arc::default(),
-            seen: (0, 0),
+            seen: (0, 0, 0),
         };
         p.sync(&preset);
         p
@@ -371,7 +385,18 @@ impl Panel {
                 self.particle = i;
                 self.inspecting = true;
                 session.send(Command::Inspect(Some(i)));
+            } else if let Some((id, at)) = link.picked_at
+                && id == status.run.recording_id
+            {
+                self.inspecting = true;
+                session.send(Command::InspectNear(at));
             }
+        }
+        if let Some((n, i)) = status.picked
+            && n != self.seen.2
+        {
+            self.seen.2 = n;
+            self.particle = i;
         }
     }
 
@@ -730,6 +755,15 @@ impl Panel {
                 .prefix("log every ")
                 .suffix(" frames"),
         );
+        if ui
+            .checkbox(&mut self.arrows, "correction arrows")
+            .on_hover_text(
+                "Draw each family's δx and δθ (level full), of the families ticked below",
+            )
+            .changed()
+        {
+            session.send(Command::Arrows(self.arrows));
+        }
         ui.horizontal_wrapped(|ui| {
             ui.label("corrections:");
             for f in Family::BY_INDEX {

@@ -335,9 +335,15 @@ fn warn(loaded: &load::Loaded) {
     }
 }
 
+/// The recording stream `args` ask for, its layout sent first.
 fn open_sink(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
-    let builder =
-        rerun::RecordingStreamBuilder::new("weft").with_default_blueprint(blueprint::default());
+    let rec = open_stream(args)?;
+    blueprint::send_default(&rec).context("sending the viewer layout")?;
+    Ok(rec)
+}
+
+fn open_stream(args: &RecordArgs) -> anyhow::Result<rerun::RecordingStream> {
+    let builder = rerun::RecordingStreamBuilder::new("weft");
     if let Some(path) = &args.save {
         return builder
             .batcher_config(telemetry::file_batching()?)

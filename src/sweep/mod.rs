@@ -433,9 +433,9 @@ pub fn run_point(
     let frames = plan.frames_of(loaded, &scene);
     let batching = telemetry::file_batching()?;
     let stream = rerun::RecordingStreamBuilder::new("weft")
-        .with_default_blueprint(blueprint::default())
         .batcher_config(batching)
         .save(&part)
+        .and_then(|s| blueprint::send_default(&s).map(|()| s))
         .map_err(|source| SweepError::Recording {
             path: part.clone(),
             source,

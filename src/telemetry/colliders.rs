@@ -28,7 +28,8 @@ pub fn log_static(rec: &RecordingStream, scene: &Scene) -> RecordingStreamResult
     for (k, c) in scene.preset().colliders.iter().enumerate() {
         let path = path(c, k);
         let rotation = crate::scene::preset::euler(c.rotation);
-        let colour = rerun::Color::from_unmultiplied_rgba(120, 140, 170, 160);
+        // Faint: the cloth is what the view is about.
+        let colour = rerun::Color::from_unmultiplied_rgba(120, 140, 170, 80);
         match c.shape {
             ShapeKind::Plane => rec.log_static(
                 path,

@@ -86,7 +86,7 @@ impl Telemetry {
         let (threshold, scale) = (self.settings.arrow_threshold, self.settings.arrow_scale);
         for f in Family::ALL {
             let fd = d.family(f);
-            let shown = self.settings.corrections[f];
+            let shown = self.arrows && self.settings.corrections[f];
             for (k, (kind, vectors)) in [("dx", &fd.dx), ("dtheta", &fd.dtheta)]
                 .into_iter()
                 .enumerate()

@@ -108,6 +108,9 @@ pub struct Telemetry {
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
     particle_values: bool,
+    /// Whether level full draws the correction arrows (of the families on
+    /// in the settings).
+    arrows: bool,
     /// What the frames logged so far left on screen of what only level
     /// full draws.
     drawn: full::Drawn,
@@ -125,6 +128,7 @@ impl Telemetry {
             last_poses: Vec::new(),
             last_cost: Duration::ZERO,
             particle_values: false,
+            arrows: true,
             drawn: full::Drawn::default(),
             crossings_drawn: false,
         }
@@ -136,6 +140,19 @@ impl Telemetry {
     /// `weft record` leaves it off (it adds about a third to a full file).
     pub fn set_particle_values(&mut self, on: bool) {
         self.particle_values = on;
+    }
+
+    /// Whether level full draws the correction arrows at all (of the
+    /// families on in the settings' `corrections`). On unless turned off:
+    /// the desktop debugger starts with them off, and its panel turns them
+    /// on. Off, the arrows drawn so far are cleared at the next frame.
+    pub fn set_arrows(&mut self, on: bool) {
+        self.arrows = on;
+    }
+
+    /// Whether level full draws the correction arrows ([`Self::set_arrows`]).
+    pub fn arrows(&self) -> bool {
+        self.arrows
     }
 
     /// The settings in force.

@@ -52,6 +52,11 @@ pub enum Command {
     Tune(Tuning),
     /// New telemetry settings.
     Telemetry(TelemetrySettings),
+    /// Whether the correction arrows are drawn (level full; off at start).
+    Arrows(bool),
+    /// Inspect the particle nearest this point (world coordinates, at the
+    /// current frame): a click on the cloth's mesh in the 3D view.
+    InspectNear([f32; 3]),
     /// Load another preset (validated by the caller) and start over.
     Load(Box<Loaded>, String),
     /// Start recording to an `.rrd` file (a new run).
@@ -160,6 +165,9 @@ pub struct Status {
     pub checkpoints: (usize, u64),
     /// The inspected particle.
     pub particle: Option<ParticleReadout>,
+    /// The last [`Command::InspectNear`]'s particle, with how many have
+    /// been handled (so the panel sees each once).
+    pub picked: Option<(u64, usize)>,
     /// The recording file, while recording.
     pub recording: Option<PathBuf>,
     /// The last error (a solver failure or a file problem).

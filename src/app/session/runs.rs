@@ -81,9 +81,7 @@ fn send_blueprint(rec: &rerun::RecordingStream, first: bool) -> Result<(), Strin
         make_active: first,
         make_default: true,
     };
-    blueprint::desktop()
-        .send(rec, activation)
-        .map_err(|e| e.to_string())
+    blueprint::send_desktop(rec, activation).map_err(|e| e.to_string())
 }
 
 /// How a new run starts.
@@ -174,6 +172,8 @@ pub(super) fn open(
     telemetry.forget();
     // For hovering a particle in the viewer (at level full).
     telemetry.set_particle_values(true);
+    // The correction arrows cover the cloth: the panel turns them on.
+    telemetry.set_arrows(false);
     let mut run = match (scene, snapshot) {
         (Some((scene, resolved)), _) => Run::start(scene, telemetry, preset_name, &resolved),
         (_, Some(snapshot)) => {

@@ -34,6 +34,8 @@ pub(super) struct Worker {
     tee: Arc<Tee>,
     forward: Forward,
     inspect: Option<usize>,
+    /// The last particle picked near a point, and how many were.
+    picked: Option<(u64, usize)>,
     /// The file the current run is recorded to, if any.
     recording: Option<PathBuf>,
     status: Arc<Mutex<Status>>,
@@ -81,6 +83,7 @@ impl Worker {
             tee: opened.tee,
             forward,
             inspect: None,
+            picked: None,
             recording: None,
             status,
             waker,
@@ -188,6 +191,7 @@ impl Worker {
                 }
                 self.run.telemetry.set_settings(t);
             }
+            Command::Arrows(on) => self.run.telemetry.set_arrows(on),
             Command::Load(loaded, name) => {
                 self.name = name;
                 self.loaded = *loaded.clone();
@@ -215,6 +219,26 @@ impl Worker {
                 self.stop_recording();
             }
             Command::Branch(at) => self.branch(at),
+            Command::InspectNear(at) => {
+                let at = glam::Vec3::from_array(at);
+                let nearest = self
+                    .run
+                    .scene
+                    .world_positions()
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| {
+                        a.1.distance_squared(at)
+                            .total_cmp(&b.1.distance_squared(at))
+                    })
+                    .map(|(i, _)| i);
+                if let Some(i) = nearest {
+                    let picks = self.picked.map_or(0, |(n, _)| n) + 1;
+                    self.picked = Some((picks, i));
+                    self.inspect = Some(i);
+                    self.diagnose();
+                }
+            }
             Command::Inspect(p) => {
                 let n = self.run.scene.solver().state().len();
                 self.inspect = p.filter(|&i| i < n);
@@ -333,6 +357,7 @@ impl Worker {
             ..RunInfo::default()
         };
         let settings = *self.run.telemetry.settings();
+        let arrows = self.run.telemetry.arrows();
         // The base a run's name is described against: the preset as named.
         let base = load::load(&self.name, &[]).ok().map(|l| l.preset);
         match open(&self.forward, start, &self.name, info, settings, base, file) {
@@ -352,6 +377,7 @@ impl Worker {
                 let old = std::mem::replace(&mut self.rec, opened.rec);
                 let flushed = old.flush_blocking();
                 self.run = opened.run;
+                self.run.telemetry.set_arrows(arrows);
                 self.diagnose();
                 self.history = opened.history;
                 self.info = opened.info.clone();
@@ -470,6 +496,7 @@ impl Worker {
         s.run = self.info.clone();
         s.runs = self.runs.clone();
         s.recording = self.recording.clone();
+        s.picked = self.picked;
         progress.write(&mut s);
         drop(s);
         self.wake();
