@@ -10,17 +10,13 @@
 use glam::DVec3;
 use weft::scene::{Scene, load};
 
-/// The shipped car flag's cloth and solver on a carrier at `x` metres along
-/// X, no air: on a fixed pole (`carrier = "static"`) or on a car at
-/// `speed` m/s from the start.
-fn limp_flag(x: f64, speed: Option<f64>) -> Scene {
-    let body = match speed {
-        None => format!("[bodies.static]\nposition = [{x}, 0.0, 0.0]"),
-        Some(v) => format!("[bodies.car]\nstart = [{x}, 0.0, 0.0]\nspeed = [[0.0, {v}]]"),
-    };
+/// The shipped car flag's cloth and solver, no air, pinned along its left
+/// edge to a carrier whose motion table is `body`, with the cloth placed at
+/// `x` metres along X.
+fn flag_on(body: &str, x: f64, title: &str) -> Scene {
     let text = format!(
         r#"
-description = "A limp flag on a carrier, no air"
+description = "{title}"
 duration = 3.0
 
 [cloth]
@@ -52,8 +48,18 @@ select = ["left"]
 "#,
         cloth = x - 1.6
     );
-    let preset = load::parse("limp flag", &text).unwrap();
+    let preset = load::parse(title, &text).unwrap();
     Scene::new(&preset).unwrap()
+}
+
+/// The limp flag on a carrier at `x` metres along X: on a fixed pole
+/// (`speed` none) or on a car at `speed` m/s from the start.
+fn limp_flag(x: f64, speed: Option<f64>) -> Scene {
+    let body = match speed {
+        None => format!("[bodies.static]\nposition = [{x}, 0.0, 0.0]"),
+        Some(v) => format!("[bodies.car]\nstart = [{x}, 0.0, 0.0]\nspeed = [[0.0, {v}]]"),
+    };
+    flag_on(&body, x, "A limp flag on a carrier, no air")
 }
 
 /// Steps `scene` for 3 s; at every frame, the particles in the carrier's
@@ -135,43 +141,12 @@ fn a_cloth_starts_moving_with_its_carrier() {
 /// rest (2.4 cm behind at its free edge).
 #[test]
 fn a_cloth_starts_turning_with_its_carrier() {
-    let text = r#"
-description = "A limp flag on a pole that turns from the start"
-duration = 1.0
-
-[cloth]
-width = 0.9
-height = 0.6
-weft = 24
-warp = 16
-density = 0.15
-thickness = 0.004
-position = [-1.6, 0.55, 1.35]
-rotation = [-90.0, 0.0, -180.0]
-
-[solver]
-damping = 0.99
-iterations = 2
-substeps = 8
-
-[environment]
-air_density = 0.0
-
-[[bodies]]
-name = "pole"
-
-[bodies.keyframes]
+    let body = "[bodies.keyframes]
 keys = [
   { t = 0.0, rotation = [0.0, 0.0, 0.0] },
   { t = 1.0, rotation = [0.0, 0.0, 90.0] },
-]
-
-[[attachments]]
-body = "pole"
-select = ["left"]
-"#;
-    let preset = load::parse("turning flag", text).unwrap();
-    let mut scene = Scene::new(&preset).unwrap();
+]";
+    let mut scene = flag_on(body, 0.0, "A limp flag on a pole that turns from the start");
     let before = scene.world_positions().into_owned();
     scene.step().unwrap();
     let after = scene.world_positions();
