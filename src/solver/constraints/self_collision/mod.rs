@@ -29,9 +29,9 @@
 //! broad phase keeps while the cloth has not moved apart by more than a
 //! skin (`broad_phase::NearTriangles`), and kept for all the substep's
 //! sweeps; they are coloured like every other constraint set, so the
-//! threads share them bit-identically. For a second after a jerk, particles
-//! of edges that cross a triangle (`SelfContacts::find_tangles`) are left
-//! out, so that a cloth dragged through itself comes apart instead of being
+//! threads share them bit-identically. After a jerk, for a second and then
+//! until none is found, particles of edges that cross a triangle
+//! (`SelfContacts::find_tangles`) are left out, so that a cloth dragged through itself comes apart instead of being
 //! held tangled. Friction between layers is the colliders' Coulomb model
 //! (`apply_friction`).
 //!
