@@ -13,6 +13,7 @@
 //! A branch inherits its parent's history up to the branch frame: the two
 //! runs are the same up to there.
 
+use crate::app::session::SessionError;
 use crate::record::Snapshot;
 use crate::scene::Tuning;
 
@@ -87,23 +88,23 @@ impl History {
     /// The run's state at `frame` (at most [`History::last_frame`]): the
     /// nearest checkpoint before it, stepped silently with the tuning
     /// changes of the run. Bit-identical to the run at that frame.
-    pub fn state_at(&self, frame: u64) -> Result<Snapshot, String> {
+    pub fn state_at(&self, frame: u64) -> Result<Snapshot, SessionError> {
         let frame = frame.min(self.last_frame());
         let (start, snapshot) = self
             .checkpoints
             .iter()
             .rev()
             .find(|(f, _)| *f <= frame)
-            .ok_or_else(|| format!("frame {frame} is before this run started"))?;
+            .ok_or(SessionError::BeforeRun(frame))?;
         let mut s = snapshot.clone();
         for f in start + 1..=frame {
             for (_, t) in self.tunings.iter().filter(|(at, _)| *at == f) {
                 s.scene
                     .set_tuning(t)
-                    .map_err(|e| format!("the tuning at frame {f}: {e}"))?;
+                    .map_err(|source| SessionError::Tuning { frame: f, source })?;
             }
             s.advance()
-                .map_err(|e| format!("stepping to frame {f}: {e}"))?;
+                .map_err(|source| SessionError::Step { frame: f, source })?;
         }
         Ok(s)
     }

@@ -187,13 +187,65 @@ pub struct Session {
     thread: Option<JoinHandle<()>>,
 }
 
+/// What went wrong in the simulation thread: starting or ending a run,
+/// recording, or replaying a run's history to a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The preset's scene could not be built.
+    #[error(transparent)]
+    Setup(#[from] crate::solver::SetupError),
+    /// A run could not be started, logged or finished.
+    #[error(transparent)]
+    Run(#[from] Box<crate::record::RunError>),
+    /// Parameters that do not apply.
+    #[error(transparent)]
+    Params(#[from] crate::solver::ParamError),
+    /// Rerun refused a message (the layout, a property).
+    #[error(transparent)]
+    Stream(#[from] rerun::RecordingStreamError),
+    /// The viewer or the file did not take everything logged.
+    #[error(transparent)]
+    Flush(#[from] rerun::sink::SinkFlushError),
+    /// The recording file could not be completed.
+    #[error("the recording file may be incomplete: {0}")]
+    File(rerun::external::re_log_encoding::FileFlushError),
+    /// The simulation thread could not be started.
+    #[error("starting the simulation thread: {0}")]
+    Thread(std::io::Error),
+    /// A frame the run's history does not reach.
+    #[error("frame {0} is before this run started")]
+    BeforeRun(u64),
+    /// The tuning stored for a frame does not apply.
+    #[error("the tuning at frame {frame}: {source}")]
+    Tuning {
+        /// The frame.
+        frame: u64,
+        /// Why.
+        source: crate::solver::ParamError,
+    },
+    /// The solver failed replaying the history.
+    #[error("stepping to frame {frame}: {source}")]
+    Step {
+        /// The frame.
+        frame: u64,
+        /// The failure.
+        source: crate::solver::StepError,
+    },
+}
+
+impl From<crate::record::RunError> for SessionError {
+    fn from(e: crate::record::RunError) -> Self {
+        Self::Run(Box::new(e))
+    }
+}
+
 impl Session {
     /// Starts a paused session of `loaded`, its telemetry forwarded to `forward`.
     pub fn start(
         loaded: Loaded,
         name: String,
         forward: impl Fn(&LogMsg) + Send + Sync + 'static,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SessionError> {
         let status = Arc::new(Mutex::new(Status {
             preset_name: name.clone(),
             preset: Some(loaded.preset.clone()),
@@ -214,7 +266,7 @@ impl Session {
         let thread = std::thread::Builder::new()
             .name("weft-sim".into())
             .spawn(move || worker.serve(rx))
-            .map_err(|e| e.to_string())?;
+            .map_err(SessionError::Thread)?;
         Ok(Self {
             tx,
             status,

@@ -15,7 +15,7 @@ use crate::scene::{Loaded, Preset, Scene, Tuning, load, preset::TelemetrySetting
 use crate::solver::Family;
 use crate::telemetry::{Telemetry, blueprint};
 
-use super::RunInfo;
+use super::{RunInfo, SessionError};
 
 pub(super) type Forward = Arc<dyn Fn(&LogMsg) + Send + Sync>;
 
@@ -34,12 +34,12 @@ impl Tee {
     }
 
     /// Writes the footer and closes the file, if there is one.
-    pub(super) fn stop(&self) -> Result<(), String> {
+    pub(super) fn stop(&self) -> Result<(), SessionError> {
         let file = self.file.lock().expect("not poisoned").take();
         match file {
             Some(f) => f
                 .flush_blocking(Duration::from_secs(10))
-                .map_err(|e| format!("the recording file may be incomplete: {e}")),
+                .map_err(SessionError::File),
             None => Ok(()),
         }
     }
@@ -75,13 +75,13 @@ pub fn stream(
 /// timeline before the recording has it, and the viewer would warn. The
 /// first run's layout is made active; later runs' is the default, so a
 /// layout the user has changed stays.
-fn send_blueprint(rec: &rerun::RecordingStream, first: bool) -> Result<(), String> {
-    rec.flush_blocking().map_err(|e| e.to_string())?;
+fn send_blueprint(rec: &rerun::RecordingStream, first: bool) -> Result<(), SessionError> {
+    rec.flush_blocking()?;
     let activation = rerun::blueprint::BlueprintActivation {
         make_active: first,
         make_default: true,
     };
-    blueprint::send_desktop(rec, activation).map_err(|e| e.to_string())
+    Ok(blueprint::send_desktop(rec, activation)?)
 }
 
 /// How a new run starts.
@@ -125,11 +125,11 @@ pub(super) fn open(
     settings: TelemetrySettings,
     base: Option<Preset>,
     file: Option<FileSink>,
-) -> Result<Opened, String> {
+) -> Result<Opened, SessionError> {
     let mut parent_series = Series::new();
     let (scene, history, tuning, snapshot) = match start {
         Start::Fresh(loaded) => {
-            let scene = Scene::new(&loaded.preset).map_err(|e| e.to_string())?;
+            let scene = Scene::new(&loaded.preset)?;
             (Some((scene, loaded.resolved)), None, None, None)
         }
         Start::Branch {
@@ -181,11 +181,10 @@ pub(super) fn open(
             Run::resume(snapshot, telemetry, preset_name, &resolved)
         }
         _ => unreachable!("a run starts from a scene or a snapshot"),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     send_blueprint(&rec, info.number == 1)?;
     if let Some(t) = tuning {
-        run.set_tuning(&t).map_err(|e| e.to_string())?;
+        run.set_tuning(&t)?;
     }
     let history = match history {
         Some(h) => h,
@@ -210,10 +209,9 @@ pub(super) fn open(
             .with_component::<rerun::components::Text>("parent_run", [number.to_string()])
             .with_component::<rerun::components::Text>("parent_frame", [frame.to_string()]);
     }
-    rec.send_property("weft", &props)
-        .map_err(|e| e.to_string())?;
+    rec.send_property("weft", &props)?;
     if let Some((number, _, _)) = &info.parent {
-        log_parent_series(&rec, *number, &parent_series).map_err(|e| e.to_string())?;
+        log_parent_series(&rec, *number, &parent_series)?;
     }
     Ok(Opened {
         run,

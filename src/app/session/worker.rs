@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use rerun::sink::FileSink;
 
+use super::SessionError;
 use crate::app::history::History;
 use crate::record::{Check, Run, verdict};
 use crate::scene::{Loaded, Scene, load};
@@ -57,7 +58,7 @@ impl Worker {
         status: Arc<Mutex<Status>>,
         waker: Arc<Mutex<Option<Waker>>>,
         shown: Arc<Mutex<Shown>>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SessionError> {
         let base = load::load(&name, &[]).ok().map(|l| l.preset);
         let opened = open(
             &forward,
@@ -388,7 +389,7 @@ impl Worker {
                 true
             }
             Err(e) => {
-                self.set_error(Some(e));
+                self.set_error(Some(e.to_string()));
                 false
             }
         }
@@ -402,31 +403,26 @@ impl Worker {
         }
     }
 
-    fn end_run(&mut self) -> Result<(), String> {
-        let figures = self.run.log_summary().map_err(|e| e.to_string())?;
+    fn end_run(&mut self) -> Result<(), SessionError> {
+        let figures = self.run.log_summary()?;
         let checks = verdict(self.run.scene.preset().expect.as_ref(), &figures);
-        self.rec
-            .send_property(
-                "result",
-                &rerun::AnyValues::default()
-                    .with_component::<rerun::components::Text>(
-                        "frames",
-                        [figures.frames.to_string()],
-                    )
-                    .with_component::<rerun::components::Text>(
-                        "final_state",
-                        [figures.final_state.clone()],
-                    )
-                    .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
-            )
-            .map_err(|e| e.to_string())?;
-        self.rec.flush_blocking().map_err(|e| e.to_string())
+        self.rec.send_property(
+            "result",
+            &rerun::AnyValues::default()
+                .with_component::<rerun::components::Text>("frames", [figures.frames.to_string()])
+                .with_component::<rerun::components::Text>(
+                    "final_state",
+                    [figures.final_state.clone()],
+                )
+                .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
+        )?;
+        Ok(self.rec.flush_blocking()?)
     }
 
     /// Closes the recording file, if there is one.
     fn stop_recording(&mut self) {
         if let Err(e) = self.tee.stop() {
-            self.set_error(Some(e));
+            self.set_error(Some(e.to_string()));
         }
         self.recording = None;
     }
