@@ -526,7 +526,14 @@ impl Solver {
     /// How many edges of the cloth's mesh cross a triangle they share no
     /// particle with: 0 while the cloth does not pass through itself.
     pub fn self_crossings(&self) -> usize {
-        self_collision::crossings(&self.state.position, &self.topology.triangles, &self.spec)
+        // On every thread there is, whatever the cloth's size: the count is
+        // a sum of independent shares.
+        self_collision::crossings(
+            &self.state.position,
+            &self.topology.triangles,
+            &self.spec,
+            team::available(),
+        )
     }
 
     /// Where the edges [`Solver::self_crossings`] counts pass through their
