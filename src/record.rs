@@ -231,14 +231,7 @@ impl Run {
     }
 
     fn measure(&mut self) {
-        measure(&mut self.figures, self.scene.solver());
-        // Without diagnostics, crossings are counted only for a bound.
-        let bounded =
-            (self.scene.preset().expect.as_ref()).is_some_and(|e| e.max_crossings.is_some());
-        if self.scene.solver().diagnostics().is_none() && bounded {
-            let n = self.scene.solver().self_crossings();
-            self.figures.count_crossings(n);
-        }
+        measure(&mut self.figures, &self.scene);
     }
 
     /// A copy of the run's state (scene and figures), to resume from later.
@@ -335,13 +328,16 @@ impl Snapshot {
     /// [`Run::step`] would.
     pub fn advance(&mut self) -> Result<(), StepError> {
         self.scene.step()?;
-        measure(&mut self.figures, self.scene.solver());
+        measure(&mut self.figures, &self.scene);
         Ok(())
     }
 }
 
-/// Folds the solver's state after a step into the running figures.
-fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
+/// Folds the solver's state after a step into the running figures. The
+/// crossings come from the diagnostics; without them they are counted only
+/// for a bound that asks for them.
+fn measure(f: &mut Figures, scene: &Scene) {
+    let solver = scene.solver();
     let (strain, violations) = match solver.diagnostics() {
         Some(d) => (d.max_strain, d.families.map(|_, fd| fd.violation.max)),
         None => (
@@ -350,8 +346,15 @@ fn measure(f: &mut Figures, solver: &crate::solver::Solver) {
         ),
     };
     f.max_strain = f.max_strain.max(strain);
-    if let Some(n) = solver.diagnostics().and_then(|d| d.self_crossings) {
-        f.count_crossings(n);
+    let bounded = (scene.preset().expect.as_ref()).is_some_and(|e| e.max_crossings.is_some());
+    match solver.diagnostics() {
+        Some(d) => {
+            if let Some(n) = d.self_crossings {
+                f.count_crossings(n);
+            }
+        }
+        None if bounded => f.count_crossings(solver.self_crossings()),
+        None => {}
     }
     for (fam, &v) in violations.iter() {
         let slot = f.max_violation.entry(fam.name().to_string()).or_insert(0.0);

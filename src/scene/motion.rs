@@ -274,11 +274,11 @@ impl Path {
         self.extend_to(t);
         let f = t * PATH_RATE as f64;
         let k = (f.floor() as usize).min(self.samples.len() - 2);
-        let u64 = f - k as f64;
-        let u = u64 as f32;
+        let along = f - k as f64;
+        let u = along as f32;
         let (a, b) = (self.samples[k], self.samples[k + 1]);
-        let x = a.xy[0] + (b.xy[0] - a.xy[0]) * u64;
-        let y = a.xy[1] + (b.xy[1] - a.xy[1]) * u64;
+        let x = a.xy[0] + (b.xy[0] - a.xy[0]) * along;
+        let y = a.xy[1] + (b.xy[1] - a.xy[1]) * along;
         let heading = a.heading + (b.heading - a.heading) * u;
         let body: [f32; 4] = std::array::from_fn(|k| a.body[k] + (b.body[k] - a.body[k]) * u);
         match &self.driver {

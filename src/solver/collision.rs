@@ -205,10 +205,7 @@ pub struct Collider {
 impl Collider {
     /// The collider's world pose, given the body poses.
     pub fn world_pose(&self, bodies: &[Pose]) -> Pose {
-        match self.body {
-            Some(b) => bodies[b].compose(&self.pose),
-            None => self.pose,
-        }
+        self.pose_from(bodies, glam::DVec3::ZERO)
     }
 
     /// The collider's pose measured from `origin` (world coordinates), given

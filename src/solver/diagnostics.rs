@@ -131,6 +131,9 @@ pub struct Diagnostics {
     /// [`Solver::self_crossings`](super::Solver::self_crossings)) at the
     /// step's end, whatever self-collision's weight.
     pub self_crossings: Option<usize>,
+    /// Where those edges pass through their triangles, one point each
+    /// (measured from the solver's origin).
+    pub crossing_points: Vec<Vec3>,
     /// Wall times.
     pub timings: Timings,
 }

@@ -70,9 +70,9 @@ pub(crate) struct FrameStep {
 }
 
 impl FrameStep {
-    /// The origin at fraction `f` of the step.
-    pub fn origin_at(&self, f: f64, substeps: u32) -> DVec3 {
-        self.from + self.shift * (f * substeps as f64)
+    /// The origin after `k` of the step's substeps.
+    pub fn origin_after(&self, k: u32) -> DVec3 {
+        self.from + self.shift * k as f64
     }
 
     /// The frame's kick on substep `sub`: `D_prev − D` on the first, zero

@@ -526,20 +526,20 @@ impl Solver {
     /// How many edges of the cloth's mesh cross a triangle they share no
     /// particle with: 0 while the cloth does not pass through itself.
     pub fn self_crossings(&self) -> usize {
-        // On every thread there is, whatever the cloth's size: the count is
-        // a sum of independent shares.
-        self_collision::crossings(
+        self.self_crossing_points().len()
+    }
+
+    /// Where the edges [`Solver::self_crossings`] counts pass through their
+    /// triangles, one point each, found as it counts them.
+    pub fn self_crossing_points(&self) -> Vec<Vec3> {
+        // On every thread there is, whatever the cloth's size: the shares
+        // are independent and joined in order.
+        self_collision::crossing_points(
             &self.state.position,
             &self.topology.triangles,
             &self.spec,
             team::available(),
         )
-    }
-
-    /// Where the edges [`Solver::self_crossings`] counts pass through their
-    /// triangles, one point each.
-    pub fn self_crossing_points(&self) -> Vec<Vec3> {
-        self_collision::crossing_points(&self.state.position, &self.topology.triangles, &self.spec)
     }
 
     /// The largest strain of a weft or warp edge.
@@ -648,7 +648,7 @@ impl Solver {
             if self.self_collision_on() {
                 self.find_tangles()
             } else {
-                self.self_crossings()
+                self.self_crossing_points()
             }
         });
         self.time += self.params.dt as f64;
@@ -661,7 +661,8 @@ impl Solver {
             let violations = self.violations_from(facing);
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.orientation = diagnostics::orientation(&offsets);
-            d.self_crossings = crossings;
+            d.self_crossings = crossings.as_ref().map(Vec::len);
+            d.crossing_points = crossings.unwrap_or_default();
             for (fd, v) in d.families.iter_mut().zip(violations) {
                 fd.violation = v;
             }
@@ -721,11 +722,7 @@ impl Solver {
 
         self.collider_from.clear();
         self.collider_to.clear();
-        let substeps = self.params.substeps;
-        let (o0, o1) = (
-            frame.origin_at(sub as f64 / substeps as f64, substeps),
-            frame.origin_at((sub + 1) as f64 / substeps as f64, substeps),
-        );
+        let (o0, o1) = (frame.origin_after(sub), frame.origin_after(sub + 1));
         for c in &self.colliders {
             self.collider_from.push(c.pose_from(&self.sub_from, o0));
             self.collider_to.push(c.pose_from(&self.sub_to, o1));
@@ -805,9 +802,9 @@ impl Solver {
     }
 
     /// Finds which particles are tangled now (self-collision leaves them to
-    /// the other families until they come apart), and returns how many
+    /// the other families until they come apart), and returns where the
     /// (edge, triangle) pairs cross. Timed with the self-collision family.
-    fn find_tangles(&mut self) -> usize {
+    fn find_tangles(&mut self) -> Vec<Vec3> {
         let t = self.diagnostics.is_some().then(Instant::now);
         let crossings = self.self_contacts.find_tangles(
             &self.state.position,
@@ -919,7 +916,6 @@ impl Solver {
     /// so a cloth on a body that is already moving starts in steady motion.
     /// The motion is the body's over the first substep, taken as under way.
     fn start_with_carriers(&mut self, bodies: &[Pose]) {
-        self.refresh_tethers();
         let substeps = self.params.substeps as f32;
         // Each body's motion over a substep, `M = P(Δt/s) ∘ P(0)⁻¹`, and
         // the pose it came from, `M⁻¹ ∘ P(0)`.

@@ -161,8 +161,6 @@ pub(crate) fn integrate(
         mean,
         motions: &motions,
         frame,
-        moving: frame.before != Vec3::ZERO,
-        kicked: frame.kick != Vec3::ZERO,
     };
     let n = state.len();
     let (x, prev_x) = (
@@ -208,13 +206,9 @@ struct Step<'a> {
     mean: Vec3,
     /// Each body's rigid motion over the last substep.
     motions: &'a [Pose],
-    /// How the origin moves.
+    /// How the origin moves (a zero motion or kick is not added: the bits
+    /// stay those of a frame at rest).
     frame: FrameMotion,
-    /// Whether the origin moved over the last substep (else a particle's
-    /// motion is its world motion, and nothing is added to it).
-    moving: bool,
-    /// Whether this substep has a kick (else nothing is added).
-    kicked: bool,
 }
 
 impl Step<'_> {
@@ -226,7 +220,7 @@ impl Step<'_> {
         let carried = carrier.map_or(self.mean, |m| m.transform_point(before) - before);
         let mut acc = self.env.gravity;
         if self.with_wind {
-            let world = if self.moving {
+            let world = if self.frame.before != Vec3::ZERO {
                 disp + self.frame.before
             } else {
                 disp
@@ -236,7 +230,7 @@ impl Step<'_> {
         }
         *prev = now;
         let next = now + carried + (disp - carried) * self.damping + acc * (self.dt * self.dt);
-        *x = if self.kicked {
+        *x = if self.frame.kick != Vec3::ZERO {
             next + self.frame.kick
         } else {
             next

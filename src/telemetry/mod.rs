@@ -461,15 +461,17 @@ impl Telemetry {
     /// its triangle (the crossings measured at the step's end, so at level
     /// summary and full); blanked once there are none.
     fn log_crossings(&mut self, scene: &Scene, radius: f32) -> RecordingStreamResult<()> {
-        let solver = scene.solver();
-        let n = solver.diagnostics().and_then(|d| d.self_crossings);
-        if n.unwrap_or(0) == 0 {
+        let local = scene
+            .solver()
+            .diagnostics()
+            .map_or(&[][..], |d| &d.crossing_points[..]);
+        if local.is_empty() {
             if std::mem::take(&mut self.crossings_drawn) {
                 self.rec.log(paths::CROSSINGS, &batch::points(&[]))?;
             }
             return Ok(());
         }
-        let points = scene.to_world(&solver.self_crossing_points());
+        let points = scene.to_world(local);
         self.rec.log(
             paths::CROSSINGS,
             &batch::points(&points)

@@ -106,48 +106,50 @@ fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
 /// that share no particle: 0 for a cloth that does not pass through itself.
 /// Each crossing is found from the edge's end nearer the crossing point,
 /// which lies within half the longest edge of the triangle's box.
-///
-/// Counted on `threads` threads, each over a contiguous share of the grid's
-/// cells: a sum, the same for any number of them.
 pub fn crossings(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec, threads: usize) -> usize {
-    let count = |part: &[[u32; 3]]| {
-        let mut count = 0;
-        scan_crossings(x, part, spec, None, |_, _, _| count += 1);
-        count
+    crossing_points(x, triangles, spec, threads).len()
+}
+
+/// Where the edges that [`crossings`] counts pass through their triangles:
+/// one point per crossing, in triangle order. Found on `threads` threads,
+/// each over a contiguous share of the grid's cells, joined in order: the
+/// same for any number of them.
+pub fn crossing_points(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    spec: &ClothSpec,
+    threads: usize,
+) -> Vec<Vec3> {
+    let points = |part: &[[u32; 3]]| {
+        let mut points = Vec::new();
+        scan_crossings(x, part, spec, None, |_, _, at| points.push(at));
+        points
     };
     if threads <= 1 || triangles.len() < PARALLEL_MIN_TRIANGLES {
-        return count(triangles);
+        return points(triangles);
     }
     let share = triangles.len().div_ceil(threads).next_multiple_of(GROUP);
     std::thread::scope(|s| {
-        let counts: Vec<_> = triangles
+        let parts: Vec<_> = triangles
             .chunks(share)
-            .map(|part| s.spawn(move || count(part)))
+            .map(|part| s.spawn(move || points(part)))
             .collect();
-        counts
+        parts
             .into_iter()
-            .map(|c| c.join().expect("a crossing count does not panic"))
-            .sum()
+            .flat_map(|p| p.join().expect("a crossing search does not panic"))
+            .collect()
     })
 }
 
-/// Triangles below which [`crossings`] counts on one thread: a cloth of
-/// about 24 × 16 takes a few hundred microseconds, against tens of
+/// Triangles below which [`crossing_points`] searches on one thread: a
+/// cloth of about 24 × 16 takes a few hundred microseconds, against tens of
 /// microseconds to start a thread.
 const PARALLEL_MIN_TRIANGLES: usize = 512;
-
-/// Where the edges that [`crossings`] counts pass through their triangles:
-/// one point per crossing, in the order they are found.
-pub fn crossing_points(x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> Vec<Vec3> {
-    let mut points = Vec::new();
-    scan_crossings(x, triangles, spec, None, |_, _, at| points.push(at));
-    points
-}
 
 impl SelfContacts {
     /// Finds which particles are tangled at positions `x`, the ends of the
     /// edges that cross a triangle and the triangle's corners, and returns
-    /// how many (edge, triangle) pairs cross ([`crossings`]). The near
+    /// where each (edge, triangle) pair crosses ([`crossing_points`]). The near
     /// pairs of the last substep are the candidates while they still cover
     /// `x`; the result is the same either way.
     pub(crate) fn find_tangles(
@@ -155,19 +157,19 @@ impl SelfContacts {
         x: &[Vec3],
         triangles: &[[u32; 3]],
         spec: &ClothSpec,
-    ) -> usize {
+    ) -> Vec<Vec3> {
         self.tangled.clear();
         self.tangled.resize(x.len(), false);
         let tangled = &mut self.tangled;
-        let mut count = 0;
-        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri, _| {
-            count += 1;
+        let mut points = Vec::new();
+        scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri, at| {
+            points.push(at);
             for k in edge.into_iter().chain(tri) {
                 tangled[k as usize] = true;
             }
         });
-        self.tangles_left = count > 0;
-        count
+        self.tangles_left = !points.is_empty();
+        points
     }
 
     /// Leaves tangled particles out of the contacts for the next `substeps`
