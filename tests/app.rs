@@ -752,7 +752,7 @@ fn colour_by_one_family() {
     let loaded = load::load("flag_on_car", &set("correction.planarity")).unwrap();
     assert_eq!(
         loaded.preset.telemetry.color_by,
-        ColorBy::CorrectionPlanarity
+        ColorBy::CorrectionOf(Family::Planarity)
     );
     let mut scene = weft::scene::Scene::new(&loaded.preset).unwrap();
     scene.solver_mut().set_diagnostics(true);
@@ -762,11 +762,12 @@ fn colour_by_one_family() {
     let colours = |by| weft::telemetry::color::particles(by, &scene);
     let all = colours(ColorBy::Correction);
     let families: Vec<_> = [
-        ColorBy::CorrectionStretch,
-        ColorBy::CorrectionPlanarity,
-        ColorBy::CorrectionNormality,
-        ColorBy::CorrectionCurvature,
+        Family::Stretch,
+        Family::Planarity,
+        Family::Normality,
+        Family::Curvature,
     ]
+    .map(ColorBy::CorrectionOf)
     .into_iter()
     .map(colours)
     .collect();

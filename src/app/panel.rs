@@ -663,7 +663,7 @@ impl Panel {
         } = &mut self.tuning.solver;
         let free = SliderClamping::Never;
         ui.add(slider(damping, 0.0..=1.0).clamping(free).text("k damping"));
-        for f in Family::BY_INDEX {
+        for f in Family::ALL {
             ui.add(
                 slider(&mut weights[f], 0.0..=1.0)
                     .clamping(free)
@@ -743,10 +743,10 @@ impl Panel {
                 }
             });
         egui::ComboBox::from_label("colour by")
-            .selected_text(color_by.name())
+            .selected_text(color_by.name().into_owned())
             .show_ui(ui, |ui| {
-                for c in ColorBy::ALL {
-                    ui.selectable_value(color_by, c, c.name());
+                for c in ColorBy::all() {
+                    ui.selectable_value(color_by, c, c.name().into_owned());
                 }
             });
         ui.add(
@@ -766,7 +766,7 @@ impl Panel {
         }
         ui.horizontal_wrapped(|ui| {
             ui.label("corrections:");
-            for f in Family::BY_INDEX {
+            for f in Family::ALL {
                 ui.checkbox(&mut corrections[f], f.name());
             }
         });
@@ -788,7 +788,7 @@ impl Panel {
         ui.horizontal(|ui| {
             let edit = ui.add(
                 egui::TextEdit::singleline(&mut self.set_text)
-                    .hint_text("solver.weights.curvature=0.3")
+                    .hint_text("solver.weights.normality=0.3")
                     .desired_width(170.0),
             );
             apply = ui.button("Apply").clicked()

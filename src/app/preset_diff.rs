@@ -1,5 +1,5 @@
 //! What a tuned preset changed against the preset it started from: for the
-//! names of runs (`curvature 0.1→0.35`) and for saving a preset as
+//! names of runs (`normality 0.2→0.45`) and for saving a preset as
 //! `extend = "<base>"` plus only the changed keys.
 //!
 //! Presets are compared as TOML tables: tables key by key, anything else
@@ -16,7 +16,7 @@ use crate::scene::{Preset, load};
 /// the new value.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Change {
-    /// `solver.weights.curvature`.
+    /// `solver.weights.normality`.
     pub key: String,
     /// The value in the base.
     pub old: Option<Value>,
@@ -60,7 +60,7 @@ fn short(v: &Value) -> String {
     }
 }
 
-/// The changes a person cares about in a run's name: `curvature 0.1→0.35,
+/// The changes a person cares about in a run's name: `normality 0.2→0.45,
 /// iterations 10→14` (the last part of each key; telemetry left out; at
 /// most three, then `+N more`).
 pub fn describe(base: &Preset, current: &Preset) -> String {

@@ -19,8 +19,8 @@ Exit codes: 0 compared; 1 a --fail-if bound regressed (a table says what); 2 bad
 what could be compared.
 
 --fail-if FIGURE OP LIMIT: the run fails when `value OP LIMIT` holds.
-  FIGURE  max_strain, max_violation.FAMILY (stretch, planarity, normality,
-          curvature, self, facing), final_energy, steps_per_second,
+  FIGURE  max_strain, max_violation.FAMILY (a family's name, as in the
+          preset's [solver.weights]), final_energy, steps_per_second,
           wall_seconds, frames, sim_seconds
   OP      >  >=  <  <=
   LIMIT   a number (checks every run), or relative to the first run A

@@ -40,7 +40,7 @@ pub enum Command {
         /// Preset files or shipped preset names.
         #[arg(required = true)]
         presets: Vec<String>,
-        /// Override a preset field, e.g. `--set solver.weights.curvature=0.3`.
+        /// Override a preset field, e.g. `--set solver.weights.normality=0.3`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<Override>,
     },
@@ -71,7 +71,7 @@ pub struct GuiArgs {
     /// Preset file or shipped preset name.
     #[arg(default_value = "flag_on_car")]
     pub preset: String,
-    /// Override a preset field, e.g. `--set solver.weights.curvature=0.3`.
+    /// Override a preset field, e.g. `--set solver.weights.normality=0.3`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<Override>,
     /// Play `--frames` frames, save a screenshot of the whole window to

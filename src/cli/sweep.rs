@@ -19,9 +19,9 @@ use crate::sweep::{MAX_POINTS, MAX_SECONDS, Plan, Progress};
 #[derive(Debug, Args)]
 #[command(after_help = "\
 Examples:
-  weft sweep flag_on_car --set solver.weights.curvature=0.05,0.1,0.2,0.35 \\
+  weft sweep flag_on_car --set solver.weights.normality=0.1,0.2,0.3,0.45 \\
       --set solver.iterations=5,10 --out runs/
-  weft sweep hanging_sheet --set solver.weights.curvature=0.05..0.4:8 --frames 120 --out runs/
+  weft sweep hanging_sheet --set solver.weights.normality=0.1..0.5:8 --frames 120 --out runs/
   weft sweep --collect runs/ --sort max_strain
 
 Points are named INDEX_KEY=VALUE_…; each writes NAME.rrd and NAME.json under --out, and

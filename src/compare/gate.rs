@@ -2,9 +2,9 @@
 //!
 //! A bound is `FIGURE OP LIMIT`:
 //!
-//! - `FIGURE`: `max_strain`, `max_violation.FAMILY` (`stretch`, `planarity`,
-//!   `normality`, `curvature`, `self`, `facing`), `final_energy`, `steps_per_second`,
-//!   `wall_seconds`, `frames`, `sim_seconds`;
+//! - `FIGURE`: `max_strain`, `max_violation.FAMILY` (any of
+//!   [`Family::NAMES`](crate::solver::Family::NAMES)), `final_energy`,
+//!   `steps_per_second`, `wall_seconds`, `frames`, `sim_seconds`;
 //! - `OP`: `>`, `>=`, `<`, `<=`: the run *fails* when `value OP LIMIT` holds;
 //! - `LIMIT`: a number (`0.05`), or relative to the first run `A`:
 //!   `A`, `1.1*A`, `A*1.1`, `A+0.002`, `1.1*A-0.001`.

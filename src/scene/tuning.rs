@@ -12,11 +12,11 @@
 //!
 //! let mut preset = load::load("flag_on_car", &[]).unwrap().preset;
 //! let mut tuning = Tuning::of(&preset);
-//! tuning.solver.weights[Family::Curvature] = 0.35;
+//! tuning.solver.weights[Family::Normality] = 0.35;
 //! tuning.validate().unwrap();
 //! tuning.apply_to(&mut preset);
-//! assert_eq!(preset.solver.weights[Family::Curvature], 0.35);
-//! assert!(Tuning::is_live("solver.weights.curvature"));
+//! assert_eq!(preset.solver.weights[Family::Normality], 0.35);
+//! assert!(Tuning::is_live("solver.weights.normality"));
 //! assert!(!Tuning::is_live("cloth.weft"));
 //! ```
 //!
@@ -155,7 +155,7 @@ mod tests {
         let before = scene.tuning();
         let mut bad = before;
         bad.wind.sway = 400.0;
-        bad.solver.weights[crate::solver::Family::Curvature] = 0.3;
+        bad.solver.weights[crate::solver::Family::Normality] = 0.3;
         let e = scene.set_tuning(&bad).unwrap_err();
         assert_eq!(e.key, "environment.wind.sway");
         assert_eq!(scene.tuning(), before, "nothing applied");

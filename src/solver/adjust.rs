@@ -1,5 +1,6 @@
 //! The adjust phase of one substep (§3.3–3.4): `iterations` sweeps over the
-//! constraint families in [`SWEEP`] order, each sweep followed by the
+//! constraint families in [`Family::ALL`] order (each as many
+//! [`passes`](Family::passes) as it asks for), each sweep followed by the
 //! colliders, all in one parallel region ([`super::team`]).
 //!
 //! Every thread of the crew walks the same sequence: for each family, each
@@ -23,9 +24,9 @@
 use std::time::{Duration, Instant};
 
 use super::collision::{self, Collider, Contact, Pose};
-use super::constraints::{NoRecord, Recorder, Shared};
 use super::diagnostics::{CorrectionTrack, Diagnostics, LargestTurn, Tracking};
-use super::family::{PerFamily, SWEEP, SharedMultipliers, Sweep};
+use super::families::{Family, PerFamily, SharedMultipliers, Sweep};
+use super::kernels::{NoRecord, Recorder, Shared};
 use super::team::{self, Crew};
 
 /// Everything one adjust phase reads and writes.
@@ -34,8 +35,6 @@ pub(crate) struct Adjust<'a> {
     pub sweep: Sweep<'a>,
     /// Every constraint's multiplier over the substep.
     pub mu: SharedMultipliers<'a>,
-    /// Families with weight 0 are skipped.
-    pub weights: &'a PerFamily<f32>,
     /// Sweeps in the phase.
     pub iterations: u32,
     /// The colliders, if there are any.
@@ -108,16 +107,17 @@ impl Adjust<'_> {
             let mut recs = recorders.map(|_, r| r.fork());
             let mut clock = (timed && crew.index() == 0).then(Clock::new);
             for _ in 0..self.iterations {
-                for (k, family) in SWEEP.into_iter().enumerate() {
-                    if self.weights[family] == 0.0 {
+                for family in Family::ALL {
+                    // Families with weight 0 are skipped.
+                    if self.sweep.weights[family] == 0.0 {
                         continue;
                     }
-                    self.sweep
-                        .project(crew, family, &self.mu, &mut recs[family]);
-                    // Consecutive sweeps of one family (stretch's passes)
-                    // are credited once, after the last.
-                    let again = SWEEP.get(k + 1) == Some(&family);
-                    if let Some(t) = tracking.filter(|_| !again) {
+                    for _ in 0..family.passes() {
+                        self.sweep
+                            .project(crew, family, &self.mu, &mut recs[family]);
+                    }
+                    // A family's passes are credited once, after the last.
+                    if let Some(t) = tracking {
                         t.credit(crew, family, p);
                     }
                     if let Some(c) = clock.as_mut() {

@@ -116,7 +116,7 @@ impl ForcedRotation {
 /// 2 ulp). Pure IEEE arithmetic, so it is the same on every machine and
 /// the SIMD lanes reproduce it bit for bit ([`lanes::math::exp_neg`]).
 ///
-/// [`lanes::math::exp_neg`]: super::constraints::lanes::math::exp_neg
+/// [`lanes::math::exp_neg`]: super::kernels::lanes::math::exp_neg
 #[inline]
 pub(crate) fn exp_neg(r: f32) -> f32 {
     let t = -r * std::f32::consts::LOG2_E + EXP_SHIFTER;

@@ -8,7 +8,9 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-use super::family::{Family, PerFamily};
+#[cfg(doc)]
+use super::families::ConstraintFamily;
+use super::families::{Family, PerFamily};
 
 /// The per-family constraint weights `λ`, each in `[0, 1]`.
 ///
@@ -16,7 +18,7 @@ use super::family::{Family, PerFamily};
 /// substeps and resolution: `λ = 0` turns the family off, `λ = 1` makes it
 /// rigid, and in between its compliance (inverse stiffness, XPBD's `α`) is
 /// [`compliance_factor`]`(λ)` times the family's reference compliance
-/// ([`REFERENCE_COMPLIANCE`]): `((1 − λ) / λ)²`, so `λ = ½` is the
+/// ([`ConstraintFamily::REFERENCE_COMPLIANCE`]): `((1 − λ) / λ)²`, so `λ = ½` is the
 /// reference material and each step of 0.1 around it is about a factor of
 /// two in stiffness. See `docs/method.md` ("Weights").
 /// The defaults are [`PerFamily::default_weights`].
@@ -26,46 +28,6 @@ pub type Weights = PerFamily<f32>;
 fn weights_over_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Weights, D::Error> {
     Weights::deserialize_over(Weights::default_weights(), d)
 }
-
-/// The reference compliances `α_ref` (at `λ = ½`) of the constraint kinds,
-/// for a square cell. A cell of aspect `w / L` (extent across the constraint
-/// over its length) divides them by `w / L`, so that the same physical cloth
-/// behaves the same at any resolution (see `docs/method.md`).
-pub struct ReferenceCompliance {
-    /// Weft and warp edges, m/N: the inverse of the cloth's stretch
-    /// stiffness `E·t` (1000 N/m at `λ = ½`).
-    pub stretch: f32,
-    /// Cell diagonals (shear, under the normality weight), m/N: the inverse
-    /// of the in-plane shear stiffness `G·t` (2 N/m at `λ = ½`).
-    pub shear: f32,
-    /// Planarity angles, 1/(N·m): the inverse of the rigidity tying each
-    /// normal to the surface around it (1e-5 N·m at `λ = ½`).
-    pub planarity: f32,
-    /// Normality angles, 1/(N·m): the inverse of the rigidity with which
-    /// neighbouring normals agree (1e-5 N·m at `λ = ½`).
-    pub normality: f32,
-    /// Curvature angles, 1/(N·m): the inverse of the bending rigidity `B`
-    /// (1e-5 N·m at `λ = ½`, a light cotton).
-    pub curvature: f32,
-    /// Facing angles, 1/(N·m): the inverse of the rigidity with which each
-    /// element turns to face the way its surface does (1e-5 N·m at `λ = ½`;
-    /// per element, whatever the resolution).
-    pub facing: f32,
-    /// Self-contacts, m/N: how far a pressed layer gives into the thickness
-    /// (1 mm per newton at `λ = ½`; the default, `λ = 1`, gives nothing).
-    pub self_contact: f32,
-}
-
-/// The reference compliances weft uses.
-pub const REFERENCE_COMPLIANCE: ReferenceCompliance = ReferenceCompliance {
-    stretch: 1e-3,
-    shear: 0.5,
-    planarity: 1e5,
-    normality: 1e5,
-    curvature: 1e5,
-    facing: 1e5,
-    self_contact: 1e-3,
-};
 
 /// How a weight scales its family's reference compliance: `((1 − λ) / λ)²`
 /// (0 at `λ = 1`, 1 at `λ = ½`, unbounded as `λ → 0`).
@@ -171,7 +133,7 @@ impl Default for Params {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("`{key}` = {value} {}; allowed: {}", self.problem(), self.allowed())]
 pub struct RangeError {
-    /// Dotted key, as in presets (`weights.curvature`, `cloth.weft`).
+    /// Dotted key, as in presets (`weights.normality`, `cloth.weft`).
     pub key: String,
     /// The rejected value, as text.
     pub value: String,

@@ -32,7 +32,7 @@ use glam::{Quat, Vec3};
 use super::{
     cloth::{ClothState, normal_of, rotate},
     collision::Pose,
-    constraints::Shared,
+    kernels::Shared,
     team,
 };
 

@@ -170,7 +170,7 @@ pub struct Point {
     /// Its place in the grid order.
     pub index: usize,
     /// Its file-name-safe name: the index, then `key=value` of each axis
-    /// with more than one value (`03_curvature=0.35_iterations=10`).
+    /// with more than one value (`03_normality=0.35_iterations=10`).
     pub name: String,
     /// `(key, value as written)` for every axis.
     pub settings: Vec<(String, String)>,
@@ -181,7 +181,7 @@ pub struct Point {
 /// The longest point name (all ASCII), leaving room for `.rrd.part`.
 pub const MAX_NAME: usize = 200;
 
-/// The last segment of a key (`solver.weights.curvature` → `curvature`).
+/// The last segment of a key (`solver.weights.normality` → `normality`).
 fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
 }

@@ -3,7 +3,7 @@
 
 use crate::scene::Tuning;
 
-/// "solver.weights.curvature 0.1 → 0.3, solver.iterations 10 → 12".
+/// "solver.weights.normality 0.2 → 0.3, solver.iterations 10 → 12".
 pub fn describe_changes(old: &Tuning, new: &Tuning) -> String {
     let a: toml::Table = toml::Table::try_from(old).expect("tuning serializes");
     let b: toml::Table = toml::Table::try_from(new).expect("tuning serializes");

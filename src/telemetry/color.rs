@@ -8,14 +8,8 @@ use crate::solver::Family;
 
 /// The colour of a family, in plots and arrows.
 pub fn family(f: Family) -> Color {
-    match f {
-        Family::Stretch => Color::from_rgb(230, 80, 70),
-        Family::Planarity => Color::from_rgb(70, 170, 230),
-        Family::Normality => Color::from_rgb(120, 200, 90),
-        Family::Curvature => Color::from_rgb(230, 170, 50),
-        Family::SelfCollision => Color::from_rgb(200, 90, 220),
-        Family::Facing => Color::from_rgb(240, 120, 160),
-    }
+    let [r, g, b] = f.color();
+    Color::from_rgb(r, g, b)
 }
 
 /// A blue → green → yellow → red ramp for `t ∈ [0, 1]`.
@@ -69,12 +63,7 @@ pub fn particles(by: ColorBy, scene: &Scene) -> Vec<Color> {
                 })
                 .collect()
         }
-        ColorBy::Correction
-        | ColorBy::CorrectionStretch
-        | ColorBy::CorrectionPlanarity
-        | ColorBy::CorrectionNormality
-        | ColorBy::CorrectionCurvature
-        | ColorBy::CorrectionSelf => match solver.diagnostics() {
+        ColorBy::Correction | ColorBy::CorrectionOf(_) => match solver.diagnostics() {
             None => vec![Color::from_rgb(220, 200, 160); n],
             Some(d) => (0..n)
                 .map(|i| {

@@ -3,7 +3,7 @@
 //!
 //! Every run of a session (the first, and each Reset, Load, Record or
 //! Branch) is its own Rerun recording, with a new recording id, a name a
-//! person can read (`#2 flag_on_car · curvature 0.1→0.35 · branch of #1 at
+//! person can read (`#2 flag_on_car · normality 0.2→0.45 · branch of #1 at
 //! frame 180`) and recording properties (`weft`: version, preset, run,
 //! changes, parent and frame of a branch; `result`, when the run ends: frames,
 //! final-state digest, verdict). Earlier runs stay in the viewer's recording

@@ -8,7 +8,7 @@ use crate::scene::preset::clip;
 /// A `--set key.path=value` override.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Override {
-    /// The dotted key path, e.g. `solver.weights.curvature` or `bodies[0].car.heading`.
+    /// The dotted key path, e.g. `solver.iterations` or `bodies[0].car.heading`.
     pub key: String,
     /// The value, parsed as TOML (a bare word becomes a string).
     pub value: Value,
@@ -21,7 +21,7 @@ pub enum OverrideError {
     #[error("`{0}` is not of the form key.path=value")]
     NoValue(String),
     /// The key is not a dotted path.
-    #[error("`{0}` is not a key path like `solver.weights.curvature` or `bodies[0].car.heading`")]
+    #[error("`{0}` is not a key path like `solver.iterations` or `bodies[0].car.heading`")]
     NotAPath(String),
     /// `extend` names a file, resolved when it is read.
     #[error(

@@ -1,7 +1,11 @@
 //! What a recording carries: the telemetry level, how often frames are
 //! logged, correction arrows and particle colours (the `[telemetry]` table).
 
+use std::borrow::Cow;
+
 use serde::{Deserialize, Serialize};
+
+use crate::solver::Family;
 
 /// How much telemetry a recording carries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -16,9 +20,9 @@ pub enum Level {
     Full,
 }
 
-/// What particles are coloured by.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+/// What particles are coloured by, named in presets as `strain`, `speed`,
+/// `correction`, `correction.<family>`, `normal_offset` or `none`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ColorBy {
     /// Largest strain of the particle's weft and warp edges.
     #[default]
@@ -27,21 +31,8 @@ pub enum ColorBy {
     Speed,
     /// Size of the particle's total correction in the last adjust.
     Correction,
-    /// Size of the stretch family's correction alone.
-    #[serde(rename = "correction.stretch")]
-    CorrectionStretch,
-    /// Size of the planarity family's correction alone.
-    #[serde(rename = "correction.planarity")]
-    CorrectionPlanarity,
-    /// Size of the normality family's correction alone.
-    #[serde(rename = "correction.normality")]
-    CorrectionNormality,
-    /// Size of the curvature family's correction alone.
-    #[serde(rename = "correction.curvature")]
-    CorrectionCurvature,
-    /// Size of the self-collision family's correction alone.
-    #[serde(rename = "correction.self")]
-    CorrectionSelf,
+    /// Size of one family's correction alone.
+    CorrectionOf(Family),
     /// The angle between the element's normal and the surface's (above
     /// 90°: the element faces the other way).
     NormalOffset,
@@ -51,44 +42,34 @@ pub enum ColorBy {
 
 impl ColorBy {
     /// Every choice, in menu order.
-    pub const ALL: [ColorBy; 10] = [
-        ColorBy::Strain,
-        ColorBy::Speed,
-        ColorBy::Correction,
-        ColorBy::CorrectionStretch,
-        ColorBy::CorrectionPlanarity,
-        ColorBy::CorrectionNormality,
-        ColorBy::CorrectionCurvature,
-        ColorBy::CorrectionSelf,
-        ColorBy::NormalOffset,
-        ColorBy::None,
-    ];
+    pub fn all() -> impl Iterator<Item = ColorBy> {
+        [ColorBy::Strain, ColorBy::Speed, ColorBy::Correction]
+            .into_iter()
+            .chain(Family::ALL.map(ColorBy::CorrectionOf))
+            .chain([ColorBy::NormalOffset, ColorBy::None])
+    }
 
     /// The name used in presets (`correction.planarity`).
-    pub fn name(self) -> &'static str {
+    pub fn name(self) -> Cow<'static, str> {
         match self {
-            ColorBy::Strain => "strain",
-            ColorBy::Speed => "speed",
-            ColorBy::Correction => "correction",
-            ColorBy::CorrectionStretch => "correction.stretch",
-            ColorBy::CorrectionPlanarity => "correction.planarity",
-            ColorBy::CorrectionNormality => "correction.normality",
-            ColorBy::CorrectionCurvature => "correction.curvature",
-            ColorBy::CorrectionSelf => "correction.self",
-            ColorBy::NormalOffset => "normal_offset",
-            ColorBy::None => "none",
+            ColorBy::Strain => "strain".into(),
+            ColorBy::Speed => "speed".into(),
+            ColorBy::Correction => "correction".into(),
+            ColorBy::CorrectionOf(f) => format!("correction.{}", f.name()).into(),
+            ColorBy::NormalOffset => "normal_offset".into(),
+            ColorBy::None => "none".into(),
         }
     }
 
+    /// The choice a preset names, if any.
+    pub fn from_name(name: &str) -> Option<ColorBy> {
+        ColorBy::all().find(|c| c.name() == name)
+    }
+
     /// The one family a `correction.<family>` colouring shows, if any.
-    pub fn family(self) -> Option<crate::solver::Family> {
-        use crate::solver::Family;
+    pub fn family(self) -> Option<Family> {
         match self {
-            ColorBy::CorrectionStretch => Some(Family::Stretch),
-            ColorBy::CorrectionPlanarity => Some(Family::Planarity),
-            ColorBy::CorrectionNormality => Some(Family::Normality),
-            ColorBy::CorrectionCurvature => Some(Family::Curvature),
-            ColorBy::CorrectionSelf => Some(Family::SelfCollision),
+            ColorBy::CorrectionOf(f) => Some(f),
             _ => None,
         }
     }
@@ -96,6 +77,25 @@ impl ColorBy {
     /// Whether it needs every particle's corrections.
     pub fn uses_corrections(self) -> bool {
         self == ColorBy::Correction || self.family().is_some()
+    }
+}
+
+impl Serialize for ColorBy {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for ColorBy {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        ColorBy::from_name(&name).ok_or_else(|| {
+            let names: Vec<String> = ColorBy::all().map(|c| c.name().into_owned()).collect();
+            serde::de::Error::custom(format!(
+                "unknown colouring `{name}`, expected one of {}",
+                names.join(", ")
+            ))
+        })
     }
 }
 

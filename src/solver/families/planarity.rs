@@ -17,10 +17,71 @@
 
 use glam::Vec3;
 
-use super::Particles;
-use super::Recorder;
-use super::lanes::{self, Chunk, Lane};
+use super::{each_pair, measure::tally};
+use crate::solver::kernels::lanes::{self, Chunk, Lane};
+use crate::solver::kernels::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Pair};
+use super::{ConstraintFamily, Measure, Sets, Sweep, zero};
+use crate::solver::diagnostics::Violation;
+use crate::solver::kernels::{Shared, kernel, project_batches};
+use crate::solver::team::Crew;
+
+/// The planarity family.
+pub struct Planarity;
+
+impl ConstraintFamily for Planarity {
+    const NAME: &'static str = "planarity";
+    const COLOR: [u8; 3] = [70, 170, 230];
+    const DEFAULT_WEIGHT: f32 = 0.5;
+    const TURNS: bool = true;
+    /// The reference compliance `α_ref` (at `λ = ½`, for a square cell) of
+    /// planarity angles, 1/(N·m): the inverse of the rigidity tying each normal
+    /// to the surface around it (1e-5 N·m at `λ = ½`).
+    const REFERENCE_COMPLIANCE: f32 = 1e5;
+
+    type Multipliers = Vec<[f32; 2]>;
+    type Shared<'a> = Shared<'a, [f32; 2]>;
+
+    fn reset(mu: &mut Self::Multipliers, sets: &Sets) {
+        zero(mu, sets.topology.structural.len());
+    }
+
+    fn share(mu: &mut Self::Multipliers) -> Self::Shared<'_> {
+        Shared::new(mu)
+    }
+
+    fn project<R: Recorder>(
+        sweep: &Sweep,
+        crew: &Crew,
+        weight: f32,
+        mu: &Self::Shared<'_>,
+        rec: &mut R,
+    ) {
+        let (p, rot) = (sweep.p, sweep.rot);
+        let k = sweep.compliance(Self::REFERENCE_COMPLIANCE, weight);
+        let set = &sweep.sets.topology.structural;
+        project_batches(
+            crew,
+            &set.items,
+            mu,
+            &set.batches,
+            rec,
+            kernel!(|c, m, n, r| project::<F, _>(p, c, m, n, k, rot, r)),
+        );
+    }
+
+    fn violation(m: &Measure) -> Violation {
+        let (x, normal) = (&m.state.position, |i| m.state.normal(i));
+        tally(m.threads, &m.topology.structural.items, |p| {
+            violation(x, normal, p)
+        })
+    }
+
+    fn each_violation(m: &Measure, only: Option<u32>, put: &mut dyn FnMut(u32, f32)) {
+        let (x, normal) = (&m.state.position, |i| m.state.normal(i));
+        each_pair(&m.topology.structural, only, |p| violation(x, normal, p), put);
+    }
+}
 
 /// Projects up to `F::N` edges of one colour side by side,
 /// each from both ends, with compliance `alpha_t` (`α / Δt²`, for a square
@@ -93,7 +154,7 @@ fn out_of_plane(n: Vec3, s: Vec3) -> Option<(f32, Vec3, Vec3, f32)> {
     }
     let inv_cos = cos.recip();
     Some((
-        super::atan(sin * inv_cos),
+        crate::solver::kernels::angles::atan(sin * inv_cos),
         axis * inv_cos,
         (n - dir * sin) * inv_cos,
         len,

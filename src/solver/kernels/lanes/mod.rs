@@ -156,7 +156,7 @@ pub(crate) trait Lane:
 }
 
 /// Eight lanes of `wide`: two SSE registers (one AVX register in a build
-/// that enables AVX for every crate); its [`Lane`] is in `constraints/sse.rs`.
+/// that enables AVX for every crate); its [`Lane`] is in `kernels/sse.rs`.
 pub(crate) type Sse = wide::f32x8;
 
 /// Eight lanes in one AVX register, for the copy of the kernels compiled

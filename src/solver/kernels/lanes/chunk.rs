@@ -4,7 +4,7 @@
 
 use super::vectors::turn_by;
 use super::{Lane, Q4, V3};
-use crate::solver::constraints::{NoRecord, Particles, Recorder, shift, turn};
+use crate::solver::kernels::{NoRecord, Particles, Recorder, shift, turn};
 
 /// The particle indices of one role (say, every constraint's first end)
 /// across a chunk of `F::N` constraints.

@@ -5,8 +5,8 @@
 
 use glam::Vec3;
 
+use super::broad_phase::{GROUP, NearTriangles, SpatialHash};
 use super::{Foot, SelfContacts, Triangle, bounds};
-use crate::solver::broad_phase::{GROUP, NearTriangles, SpatialHash};
 use crate::solver::cloth::ClothSpec;
 use crate::solver::topology::Topology;
 

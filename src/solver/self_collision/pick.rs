@@ -4,15 +4,15 @@
 
 use glam::Vec3;
 
+use super::broad_phase::{self, NearTriangles};
 use super::{SelfContact, Triangle, bounds, least};
-use crate::solver::broad_phase::{self, NearTriangles};
 use crate::solver::cloth::ClothSpec;
-use crate::solver::constraints::lanes::{LANES, Sse as F, each};
+use crate::solver::kernels::lanes::{LANES, Sse as F, each};
 use crate::solver::team;
 use crate::solver::topology::{Batched, Topology};
 
 /// Positions of a contact search, in lanes.
-type V3 = crate::solver::constraints::lanes::V3<F>;
+type V3 = crate::solver::kernels::lanes::V3<F>;
 /// How much farther beyond a triangle's edges than [`INSIDE`](super::INSIDE) or
 /// [`INSIDE_RIM`](super::INSIDE_RIM) a particle may be, in barycentric terms, to be a contact
 /// of the substep: room to come over the triangle during the sweeps. A grid

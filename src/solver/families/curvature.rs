@@ -29,9 +29,69 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, Lane, V3};
-use super::{Particles, Recorder};
+use super::{each_triple, measure::tally};
+use crate::solver::kernels::lanes::{self, Chunk, Lane, V3};
+use crate::solver::kernels::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Triple};
+use super::{ConstraintFamily, Measure, Sets, Sweep, zero};
+use crate::solver::diagnostics::Violation;
+use crate::solver::kernels::{Shared, kernel, project_batches};
+use crate::solver::team::Crew;
+
+/// The curvature family.
+pub struct Curvature;
+
+impl ConstraintFamily for Curvature {
+    const NAME: &'static str = "curvature";
+    const COLOR: [u8; 3] = [230, 170, 50];
+    const DEFAULT_WEIGHT: f32 = 0.1;
+    const TURNS: bool = true;
+    /// The reference compliance `α_ref` (at `λ = ½`, for a square cell) of
+    /// curvature angles, 1/(N·m): the inverse of the bending rigidity `B`
+    /// (1e-5 N·m at `λ = ½`, a light cotton).
+    const REFERENCE_COMPLIANCE: f32 = 1e5;
+
+    type Multipliers = Vec<[f32; 2]>;
+    type Shared<'a> = Shared<'a, [f32; 2]>;
+
+    fn reset(mu: &mut Self::Multipliers, sets: &Sets) {
+        zero(mu, sets.topology.bend.len());
+    }
+
+    fn share(mu: &mut Self::Multipliers) -> Self::Shared<'_> {
+        Shared::new(mu)
+    }
+
+    fn project<R: Recorder>(
+        sweep: &Sweep,
+        crew: &Crew,
+        weight: f32,
+        mu: &Self::Shared<'_>,
+        rec: &mut R,
+    ) {
+        let (p, rot) = (sweep.p, sweep.rot);
+        let k = sweep.compliance(Self::REFERENCE_COMPLIANCE, weight);
+        let set = &sweep.sets.topology.bend;
+        project_batches(
+            crew,
+            &set.items,
+            mu,
+            &set.batches,
+            rec,
+            kernel!(|c, m, n, r| project::<F, _>(p, c, m, n, k, rot, r)),
+        );
+    }
+
+    fn violation(m: &Measure) -> Violation {
+        let x = &m.state.position;
+        tally(m.threads, &m.topology.bend.items, |t| violation(x, t))
+    }
+
+    fn each_violation(m: &Measure, only: Option<u32>, put: &mut dyn FnMut(u32, f32)) {
+        let x = &m.state.position;
+        each_triple(&m.topology.bend, only, |t| violation(x, t), put);
+    }
+}
 
 /// Projects up to `F::N` bend triples of one colour side by
 /// side, with compliance `alpha_t` (`α / Δt²`, for a square cell); `mu`

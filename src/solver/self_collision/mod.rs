@@ -40,17 +40,22 @@
 //! grid edges that cross a triangle they share no vertex with
 //! ([`crossings`]), which a crossing-free cloth keeps at zero.
 //!
-//! Here: the contact, its projection and friction. `pick.rs`: the contact
-//! search of a substep (`SelfContacts`). `tangles.rs`: the measures
-//! (penetration depths, crossings) and the tangles a jerk leaves.
+//! Here: the contact, its projection and friction; the family that
+//! projects the contacts is [`families::self_collision`](super::families::self_collision).
+//! `broad_phase.rs`: the spatial hash and the near pairs it keeps.
+//! `pick.rs`: the contact search of a substep (`SelfContacts`).
+//! `tangles.rs`: the measures (penetration depths, crossings) and the
+//! tangles a jerk leaves.
 
+pub(crate) mod broad_phase;
 mod pick;
+mod step;
 mod tangles;
 
 use glam::Vec3;
 
-use super::{Particles, delta_mu, shift};
 use crate::solver::cloth::normal_of;
+use crate::solver::kernels::{Particles, delta_mu, shift};
 use crate::solver::topology::Touches;
 
 pub(crate) use pick::{Layers, SelfContacts};

@@ -27,9 +27,82 @@
 
 use glam::Vec3;
 
-use super::lanes::{self, Chunk, Lane};
-use super::{Particles, Recorder};
+use super::measure::{tally, wanted};
+use crate::solver::kernels::lanes::{self, Chunk, Lane};
+use crate::solver::kernels::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Patch};
+use super::{ConstraintFamily, Measure, Sets, Sweep, zero};
+use crate::solver::diagnostics::Violation;
+use crate::solver::kernels::{Shared, kernel, project_batches};
+use crate::solver::team::Crew;
+
+/// The facing family.
+pub struct Facing;
+
+impl ConstraintFamily for Facing {
+    const NAME: &'static str = "facing";
+    const COLOR: [u8; 3] = [240, 120, 160];
+    const DEFAULT_WEIGHT: f32 = 0.99;
+    const TURNS: bool = true;
+    /// The reference compliance `α_ref` (at `λ = ½`) of facing angles,
+    /// 1/(N·m): the inverse of the rigidity with which each element turns to
+    /// face the way its surface does (1e-5 N·m at `λ = ½`; per element,
+    /// whatever the resolution).
+    const REFERENCE_COMPLIANCE: f32 = 1e5;
+    /// Its measure is the debugger's normals against the surface, taken
+    /// while facing is on.
+    const MEASURED_ONLY_WHILE_ON: bool = true;
+
+    type Multipliers = Vec<f32>;
+    type Shared<'a> = Shared<'a, f32>;
+
+    fn reset(mu: &mut Self::Multipliers, sets: &Sets) {
+        zero(mu, sets.topology.patches.len());
+    }
+
+    fn share(mu: &mut Self::Multipliers) -> Self::Shared<'_> {
+        Shared::new(mu)
+    }
+
+    fn project<R: Recorder>(
+        sweep: &Sweep,
+        crew: &Crew,
+        weight: f32,
+        mu: &Self::Shared<'_>,
+        rec: &mut R,
+    ) {
+        let (p, rot) = (sweep.p, sweep.rot);
+        let k = sweep.compliance(Self::REFERENCE_COMPLIANCE, weight);
+        let set = &sweep.sets.topology.patches;
+        project_batches(
+            crew,
+            &set.items,
+            mu,
+            &set.batches,
+            rec,
+            kernel!(|c, m, n, r| project::<F, _>(p, c, m, n, k, rot, r)),
+        );
+    }
+
+    fn violation(m: &Measure) -> Violation {
+        // Already measured as the normals against the surface: tallied
+        // from those on this thread.
+        if let Some(offsets) = m.offsets {
+            return tally(1, offsets, |a| a);
+        }
+        let (x, normal) = (&m.state.position, |i| m.state.normal(i));
+        tally(m.threads, &m.topology.patches.items, |p| {
+            violation(x, normal, p)
+        })
+    }
+
+    fn each_violation(m: &Measure, only: Option<u32>, put: &mut dyn FnMut(u32, f32)) {
+        let (x, normal) = (&m.state.position, |i| m.state.normal(i));
+        for &p in m.topology.patches.items.iter().filter(|p| wanted(only, &[p.at])) {
+            put(p.at, violation(x, normal, p));
+        }
+    }
+}
 
 /// `|n × g|` at or below which an element is taken as facing along or
 /// against its surface ([`super::axis_angle`]); `g` is not normalised
@@ -61,7 +134,7 @@ pub(crate) fn project<F: Lane, R: Recorder>(
     let g = along_weft.cross(chord(|c| c.down, |c| c.up));
     let q = at.q(p);
     let n = q.normal();
-    let (axis, angle) = super::axis_angle_lanes(n, g, TINY, &mut on, |k| along_weft.lane(k));
+    let (axis, angle) = crate::solver::kernels::angles::axis_angle_lanes(n, g, TINY, &mut on, |k| along_weft.lane(k));
     let mut m = lanes::load::<F>(mu);
     let d = lanes::delta_mu(angle, beta, F::splat(alpha_t), m);
     let d = lanes::forced(rot, angle, d, beta, on);
@@ -79,5 +152,5 @@ pub fn violation(x: &[Vec3], normal: impl Fn(usize) -> Vec3, patch: Patch) -> f3
         return 0.0;
     }
     let n = normal(patch.at as usize);
-    super::atan2(n.cross(g).length(), n.dot(g))
+    crate::solver::kernels::angles::atan2(n.cross(g).length(), n.dot(g))
 }

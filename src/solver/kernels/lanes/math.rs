@@ -3,10 +3,10 @@
 //! operation as the scalar code, so that a lane gives the scalar bits.
 
 use super::Lane;
-use crate::solver::constraints::{self, ATAN_POLY, SMALL_ANGLE_FLOOR};
 use crate::solver::forced_rotation::ForcedRotation;
+use crate::solver::kernels::angles::{self, ATAN_POLY, SMALL_ANGLE_FLOOR};
 
-/// [`atan`](crate::solver::constraints::atan) in every lane.
+/// [`atan`](crate::solver::angles::atan) in every lane.
 #[inline(always)]
 pub(crate) fn atan<F: Lane>(t: F) -> F {
     let a = t.abs();
@@ -42,7 +42,7 @@ pub(crate) fn atan<F: Lane>(t: F) -> F {
     is_small.select(small, wide)
 }
 
-/// [`atan2`](crate::solver::constraints::atan2) in every lane: in lanes for `x ≠ 0`, alone for
+/// [`atan2`](crate::solver::angles::atan2) in every lane: in lanes for `x ≠ 0`, alone for
 /// the rest (`x = 0` or NaN).
 #[inline(always)]
 pub(crate) fn atan2<F: Lane>(y: F, x: F) -> F {
@@ -54,13 +54,13 @@ pub(crate) fn atan2<F: Lane>(y: F, x: F) -> F {
     if odd.any() {
         let bits = odd.to_bitmask();
         for k in (0..F::N).filter(|k| bits & (1 << k) != 0) {
-            out.set(k, constraints::atan2(y.at(k), x.at(k)));
+            out.set(k, angles::atan2(y.at(k), x.at(k)));
         }
     }
     out
 }
 
-/// [`delta_mu`](crate::solver::constraints::delta_mu) in every lane.
+/// [`delta_mu`](crate::solver::kernels::delta_mu) in every lane.
 #[inline(always)]
 pub(crate) fn delta_mu<F: Lane>(c: F, w: F, alpha_t: F, mu: F) -> F {
     (-c - alpha_t * mu) / (w + alpha_t)
@@ -195,8 +195,8 @@ mod tests {
             let b = atan2(F::new(y), F::new(x)).to_array();
             let s = scale(&rot, F::new(ts.map(f32::abs)), F::new(full)).to_array();
             for k in 0..LANES {
-                assert_eq!(a[k].to_bits(), constraints::atan(ts[k]).to_bits());
-                assert_eq!(b[k].to_bits(), constraints::atan2(y[k], x[k]).to_bits());
+                assert_eq!(a[k].to_bits(), angles::atan(ts[k]).to_bits());
+                assert_eq!(b[k].to_bits(), angles::atan2(y[k], x[k]).to_bits());
                 assert_eq!(s[k].to_bits(), rot.scale(ts[k].abs(), full[k]).to_bits());
             }
         }
@@ -206,7 +206,7 @@ mod tests {
             let ts = each(|k| [1e-30, wide, -1e-20, 1e-40, 0.0, -0.0, 2e-13, wide][k % 8]);
             let a = atan(F::new(ts)).to_array();
             for k in 0..LANES {
-                assert_eq!(a[k].to_bits(), constraints::atan(ts[k]).to_bits());
+                assert_eq!(a[k].to_bits(), angles::atan(ts[k]).to_bits());
             }
         }
         let q = Quat::from_xyzw(0.3, -0.2, 0.5, 0.7).normalize();

@@ -19,7 +19,7 @@
 //! hash.query(lo, hi, |p| { /* p's cell overlaps [lo, hi] */ });
 //! ```
 
-use super::team;
+use crate::solver::team;
 use glam::{IVec3, Vec3};
 
 /// Which particles lie near each triangle of a mesh: every particle inside
