@@ -76,6 +76,7 @@ impl eframe::App for WeftApp {
             .default_size(340.0)
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
+        self.session.window_drew();
         // No repaint is asked for here: the session asks for one when its
         // status changes, and the viewer when a message arrives, so a
         // paused window with nobody at it does not redraw.

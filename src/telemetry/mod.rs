@@ -68,6 +68,18 @@ pub fn file_batching() -> Result<rerun::log::ChunkBatcherConfig, rerun::log::Chu
     .apply_env()
 }
 
+/// The batching of a stream to the window: chunks are sent when
+/// [`Telemetry::log_frame`] has logged a frame's drawing
+/// ([`Telemetry::send_drawings_whole`]), and otherwise once a second, so
+/// that the viewer never receives part of a frame's drawing.
+pub fn whole_frames() -> rerun::log::ChunkBatcherConfig {
+    rerun::log::ChunkBatcherConfig {
+        flush_tick: Duration::from_secs(1),
+        flush_num_bytes: u64::MAX,
+        ..rerun::log::ChunkBatcherConfig::DEFAULT
+    }
+}
+
 /// The pending bytes that flush a file recording's chunks before the tick
 /// does: above what 200 ms of full frames of a 128 × 128 sheet hold.
 const FILE_CHUNK_BYTES: u64 = 32 << 20;
@@ -116,6 +128,11 @@ pub struct Telemetry {
     drawn: full::Drawn,
     /// Whether the last logged frame marked crossings.
     crossings_drawn: bool,
+    /// Whether the next frames log what the 3D view draws, or their
+    /// scalars only ([`Self::set_visuals`]).
+    visuals: bool,
+    /// Whether each frame's drawing is flushed as soon as it is logged.
+    whole_drawings: bool,
 }
 
 impl Telemetry {
@@ -131,7 +148,21 @@ impl Telemetry {
             arrows: true,
             drawn: full::Drawn::default(),
             crossings_drawn: false,
+            visuals: true,
+            whole_drawings: false,
         }
+    }
+
+    /// Whether the frames logged from now on carry what the 3D view draws
+    /// (particles, mesh, normals, arrows, crossings, colliders, bodies), or
+    /// only their scalars. On unless turned off: the desktop debugger logs
+    /// a frame's drawing only when the window has drawn the one before, so
+    /// the viewer is never sent more than it can show, and a frame's
+    /// drawing is sent whole, at once ([`Self::log_frame`]), so the view
+    /// never mixes two frames. Turned back on, the next frame draws
+    /// everything afresh.
+    pub fn set_visuals(&mut self, on: bool) {
+        self.visuals = on;
     }
 
     /// Whether each frame at level full also logs every particle's values
@@ -196,7 +227,7 @@ impl Telemetry {
     pub fn collects_for_step(&self, frame: u64) -> Collect {
         Collect {
             figures: self.needs_diagnostics(),
-            corrections: self.needs_corrections() && self.logs_frame(frame),
+            corrections: self.needs_corrections() && self.logs_frame(frame) && self.visuals,
         }
     }
 
@@ -379,7 +410,6 @@ impl Telemetry {
         self.set_time(frame, scene.time());
         let solver = scene.solver();
         let diag = solver.diagnostics();
-        let x = &*scene.world_positions();
         let rec = &self.rec;
 
         // Scalars (none before the first step: there is nothing to measure).
@@ -434,6 +464,53 @@ impl Telemetry {
             )?;
         }
 
+        if self.visuals {
+            self.log_visuals(scene)?;
+            self.send_drawing();
+        }
+        self.last_cost = start.elapsed();
+        Ok(())
+    }
+
+    /// Logs the drawing of the scene's current frame, if that frame is
+    /// logged: for a frame logged with its scalars only
+    /// ([`Self::set_visuals`]) that the user stopped on.
+    pub fn redraw(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
+        if !self.logs_frame(scene.frame()) {
+            return Ok(());
+        }
+        self.set_time(scene.frame(), scene.time());
+        self.log_visuals(scene)?;
+        self.send_drawing();
+        Ok(())
+    }
+
+    /// Sends what is logged so far, with the frame's drawing just logged,
+    /// as one, if drawings are sent whole: the view never shows part of a
+    /// frame. (A flush of a stream to the window does not fail; if one
+    /// did, the batcher's tick would send the drawing a second later.)
+    fn send_drawing(&self) {
+        if self.whole_drawings
+            && let Err(e) = self.rec.flush_async()
+        {
+            re_log::warn_once!("sending a frame to the window: {e}");
+        }
+    }
+
+    /// Sends each frame's drawing to the sink whole, as soon as it is
+    /// logged, for a stream whose batcher does not flush on its own (the
+    /// window's: [`whole_frames`]).
+    pub fn send_drawings_whole(&mut self) {
+        self.whole_drawings = true;
+    }
+
+    /// Logs what the 3D view draws of the scene's current frame (at the
+    /// time [`Self::log_frame`] set): the particles, and at level full the
+    /// mesh, normals and arrows; the crossings, colliders and bodies.
+    pub fn log_visuals(&mut self, scene: &Scene) -> RecordingStreamResult<()> {
+        let solver = scene.solver();
+        let x = &*scene.world_positions();
+        let rec = &self.rec;
         // Particles.
         let colours = color::particles(self.settings.color_by, scene);
         let radius = 0.25 * solver.spec().spacing().0.min(solver.spec().spacing().1);
@@ -451,9 +528,7 @@ impl Telemetry {
         } else {
             self.blank_full()?;
         }
-        self.log_bodies(scene)?;
-        self.last_cost = start.elapsed();
-        Ok(())
+        self.log_bodies(scene)
     }
 
     /// Marks where the cloth passes through itself, whatever

@@ -78,6 +78,11 @@ pub(crate) struct Shown {
     /// The recording id, where the viewer's time cursor was, and when it
     /// moved there.
     pub(crate) at: Option<(String, BranchAt, Instant)>,
+    /// How many times the window has drawn: a paced simulation sends a
+    /// frame's drawing only once the window has drawn since the last one
+    /// (the other frames' scalars only), so the viewer is never sent more
+    /// than it shows.
+    pub(crate) drawn: u64,
 }
 
 /// Where a branch starts.
@@ -280,6 +285,11 @@ impl Session {
     /// the window does, a session without a viewer does not.
     pub fn pace_to_viewer(&self) {
         self.shown.lock().expect("not poisoned").pace = true;
+    }
+
+    /// Notes that the window has drawn a frame (see [`Shown::drawn`]).
+    pub fn window_drew(&self) {
+        self.shown.lock().expect("not poisoned").drawn += 1;
     }
 
     /// Notes where the viewer's time cursor is on recording `recording`

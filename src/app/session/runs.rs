@@ -13,7 +13,7 @@ use crate::app::preset_diff;
 use crate::record::{Run, Snapshot};
 use crate::scene::{Loaded, Preset, Scene, Tuning, load, preset::TelemetrySettings};
 use crate::solver::Family;
-use crate::telemetry::{Telemetry, blueprint};
+use crate::telemetry::{self, Telemetry, blueprint};
 
 use super::{RunInfo, SessionError};
 
@@ -60,6 +60,7 @@ pub fn stream(
     let sink_tee = tee.clone();
     let rec = rerun::RecordingStreamBuilder::new("weft")
         .recording_name(name)
+        .batcher_config(telemetry::whole_frames())
         .buffered()
         .expect("a buffered stream always opens");
     rec.set_sink(Box::new(rerun::sink::CallbackSink::new(move |msgs| {
@@ -174,6 +175,7 @@ pub(super) fn open(
     telemetry.set_particle_values(true);
     // The correction arrows cover the cloth: the panel turns them on.
     telemetry.set_arrows(false);
+    telemetry.send_drawings_whole();
     let mut run = match (scene, snapshot) {
         (Some((scene, resolved)), _) => Run::start(scene, telemetry, preset_name, &resolved),
         (_, Some(snapshot)) => {

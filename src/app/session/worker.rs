@@ -48,6 +48,10 @@ pub(super) struct Worker {
     speed: f32,
     next_step: Instant,
     recent: std::collections::VecDeque<Instant>,
+    /// The window's draw count when a frame's drawing was last sent.
+    drawn_seen: u64,
+    /// Whether the current frame was logged without its drawing.
+    drawing_behind: bool,
 }
 
 impl Worker {
@@ -94,6 +98,8 @@ impl Worker {
             speed: 1.0,
             next_step: Instant::now(),
             recent: Default::default(),
+            drawn_seen: 0,
+            drawing_behind: false,
         };
         worker.diagnose();
         worker.publish();
@@ -125,6 +131,13 @@ impl Worker {
                 self.playing = false;
                 self.stop_at = None;
                 self.publish_progress();
+            }
+            if !self.playing && self.drawing_behind {
+                // Stopped on a frame sent without its drawing: send it.
+                self.drawing_behind = false;
+                if let Err(e) = self.run.telemetry.redraw(&self.run.scene) {
+                    self.set_error(Some(format!("logging to the viewer failed: {e}")));
+                }
             }
             if self.playing && self.viewer_behind() {
                 // Wait for the viewer; then go on at the usual pace, without
@@ -427,8 +440,24 @@ impl Worker {
         self.recording = None;
     }
 
+    /// Whether the next frame is sent with its drawing: always, but while
+    /// playing paced to a window, only once the window has drawn since the
+    /// last drawing was sent (the frames in between send their scalars).
+    fn draws_next(&mut self) -> bool {
+        let shown = self.shown.lock().expect("not poisoned");
+        if !shown.pace || !self.playing {
+            return true;
+        }
+        let drew = shown.drawn != self.drawn_seen;
+        self.drawn_seen = shown.drawn;
+        drew
+    }
+
     fn step(&mut self) {
         let start = Instant::now();
+        let draws = self.draws_next();
+        self.run.telemetry.set_visuals(draws);
+        self.drawing_behind = !draws;
         let frame = self.run.scene.frame() + 1;
         self.history.tuning(frame, self.run.scene.tuning());
         match self.run.step() {
