@@ -12,6 +12,7 @@
 //! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `normal_offset`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` (families that turn), as `f32` | full, with `set_particle_values` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface (`full.rs`, with the normals, the corrections and the hover values) | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
+//! | `world/ghost/mesh` | another run's cloth, faint (`ghost.rs`: a branch's parent, in the debugger) | triangles static; positions and normals at the frames logged |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows, each at most the cloth's longer side long) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, as δx's), families that turn | full |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
@@ -36,6 +37,7 @@ mod changes;
 mod colliders;
 pub mod color;
 mod full;
+pub mod ghost;
 pub mod paths;
 pub mod read;
 

@@ -16,6 +16,9 @@ pub const MESH: &str = "world/cloth/mesh";
 /// Where the cloth passes through itself: a point where each crossing
 /// edge meets its triangle.
 pub const CROSSINGS: &str = "world/cloth/crossings";
+/// Another run's cloth drawn faint beside this one (in the desktop
+/// debugger, a branch's parent).
+pub const GHOST: &str = "world/ghost/mesh";
 /// Element normals.
 pub const NORMALS: &str = "world/cloth/normals";
 /// Static topology (index arrays).

@@ -18,7 +18,8 @@
 //!
 //! - `status`: the status line at the top, and how a preset error reads;
 //! - `preset`: the preset picker and loading, and "Set any field";
-//! - `transport`: Play / Pause, Step, Reset, Branch at frame, speed;
+//! - `transport`: Play / Pause, Step, Reset, Branch at frame, the parent
+//!   as a ghost, speed;
 //! - `figures`: the readouts, the verdicts and the particle inspector;
 //! - `tuning`: the solver's and the wind's sliders, the telemetry settings;
 //! - `files`: saving the preset, recording a session;
@@ -52,6 +53,8 @@ pub struct Panel {
     telemetry: TelemetrySettings,
     /// Whether the correction arrows are drawn (off at start).
     arrows: bool,
+    /// Whether a branch's parent is drawn as a ghost (on at start).
+    ghost: bool,
     speed: f32,
     open: String,
     save_path: String,
@@ -91,6 +94,7 @@ impl Panel {
             tuning: Tuning::of(&preset),
             telemetry: preset.telemetry,
             arrows: false,
+            ghost: true,
             speed: 1.0,
             open: status.preset_name.clone(),
             save_path: format!("{stem}_tuned.toml"),

@@ -1,5 +1,6 @@
 //! The run controls: Play / Pause, Step, Reset, Branch at a frame (the
-//! viewer's time cursor, or a typed frame), and the speed.
+//! viewer's time cursor, or a typed frame), for a branch whether its
+//! parent is drawn as a ghost, and the speed.
 
 use egui::Key;
 
@@ -96,6 +97,17 @@ impl Panel {
                 ui.label(format!("(time cursor {t:.2} s)"));
             }
         });
+        if let Some((parent, _, frame)) = &status.run.parent
+            && ui
+                .checkbox(&mut self.ghost, "parent as a ghost")
+                .on_hover_text(format!(
+                    "Draw run #{parent}'s cloth, faint, in the 3D view beside this one's \
+                     (from frame {frame}, where they part)"
+                ))
+                .changed()
+        {
+            session.send(Command::Ghost(self.ghost));
+        }
         if ui
             .add(
                 slider(&mut self.speed, 0.05..=4.0)

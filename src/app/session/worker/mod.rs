@@ -1,6 +1,7 @@
 //! The simulation thread's state and loop: commands in, steps at real-time
 //! pace, status out (`publish`).
 
+mod ghost;
 mod publish;
 
 use std::path::PathBuf;
@@ -18,9 +19,11 @@ use crate::solver::Family;
 use crate::telemetry::Collect;
 
 use super::runs::{Forward, SERIES_VALUES, Start, Tee, open};
+use super::trace::Trace;
 use super::{
     BranchAt, Command, FOLLOWING, MAX_LEAD, RunInfo, Series, Shown, Status, Waker, verdict_text,
 };
+use ghost::Ghost;
 
 /// What the simulation thread owns: the current run and its history, every
 /// run of the session, the stream of the current one, and the pacing.
@@ -28,6 +31,12 @@ pub(super) struct Worker {
     run: Run,
     history: History,
     series: Series,
+    /// The run's cloth, frame by frame (a branch's ghost of its parent).
+    trace: Trace,
+    /// A branch's parent, drawn faint beside its cloth.
+    ghost: Option<Ghost>,
+    /// Whether the ghost is drawn.
+    show_ghost: bool,
     info: RunInfo,
     runs: Vec<RunInfo>,
     loaded: Loaded,
@@ -77,6 +86,9 @@ impl Worker {
             run: opened.run,
             history: opened.history,
             series: Series::new(),
+            trace: Trace::default(),
+            ghost: None,
+            show_ghost: true,
             runs: vec![opened.info.clone()],
             info: opened.info,
             loaded,
@@ -97,6 +109,7 @@ impl Worker {
             recent: Default::default(),
         };
         worker.diagnose();
+        worker.keep_frame();
         worker.publish();
         Ok(worker)
     }
@@ -246,6 +259,10 @@ impl Worker {
                 self.inspect = p.filter(|&i| i < n);
                 self.diagnose();
             }
+            Command::Ghost(on) => {
+                self.show_ghost = on;
+                self.draw_ghost(true);
+            }
         }
         self.publish();
     }
@@ -324,6 +341,7 @@ impl Worker {
             Ok(snapshot) => {
                 let history = self.history.branch(frame, tuning);
                 let parent_series = self.series.clone();
+                let parent_trace = self.trace.clone();
                 self.playing = false;
                 if self.begin(
                     Start::Branch {
@@ -336,6 +354,8 @@ impl Worker {
                 ) {
                     // The two runs are the same up to the branch frame.
                     self.series.retain(|(f, _, _)| *f <= frame);
+                    self.trace.truncate_after(frame);
+                    self.start_ghost(parent_trace);
                 }
             }
             Err(e) => self.set_error(Some(format!("cannot branch at frame {frame}: {e}"))),
@@ -371,7 +391,9 @@ impl Worker {
                 self.stop_recording();
                 if opened.info.parent.is_none() {
                     self.series.clear();
+                    self.trace = Trace::default();
                 }
+                self.ghost = None;
                 self.tee = opened.tee;
                 // The speed readouts are the new run's.
                 self.recent.clear();
@@ -384,6 +406,7 @@ impl Worker {
                 self.history = opened.history;
                 self.info = opened.info.clone();
                 self.runs.push(opened.info);
+                self.keep_frame();
                 if let Err(e) = flushed {
                     self.set_error(Some(format!("the previous run: {e}")));
                 }
@@ -447,6 +470,8 @@ impl Worker {
                     values[2 + Family::COUNT] = d.orientation.flipped;
                     self.series.push((frame, run.scene.time(), values));
                 }
+                self.keep_frame();
+                self.draw_ghost(false);
             }
             Err(e) => {
                 self.playing = false;
