@@ -265,13 +265,20 @@ pub fn run(
         .viewport
         .with_app_id("weft")
         .with_inner_size([1400.0, 860.0]);
+    // A screenshot shows the window as it opens, whatever the last window
+    // on this machine left: it reads and writes its state (the window's
+    // size, egui's memory) in a scratch file of its own, not the user's.
+    let scratch = screenshot
+        .as_ref()
+        .map(|_| std::env::temp_dir().join(format!("weft-screenshot-{}.ron", std::process::id())));
+    options.persistence_path = scratch.clone();
     let startup = re_viewer::StartupOptions {
         on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
         // A screenshot shows the window as it opens, not as last left.
         persist_state: screenshot.is_none(),
         ..Default::default()
     };
-    eframe::run_native(
+    let ran = eframe::run_native(
         "weft",
         options,
         Box::new(move |cc| {
@@ -297,6 +304,10 @@ pub fn run(
                 lag: 0.0,
             }))
         }),
-    )
-    .map_err(|e| anyhow::anyhow!("the window failed: {e}"))
+    );
+    if let Some(scratch) = scratch {
+        // Nothing to keep; a file the window never wrote is not an error.
+        std::fs::remove_file(scratch).ok();
+    }
+    ran.map_err(|e| anyhow::anyhow!("the window failed: {e}"))
 }

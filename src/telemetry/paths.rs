@@ -11,6 +11,9 @@ pub const SIM_TIME: &str = "sim_time";
 pub const WORLD: &str = "world";
 /// Particles.
 pub const PARTICLES: &str = "world/cloth/particles";
+/// What the desktop debugger's camera tracks: two points about the cloth
+/// that set how far back it stands (`framing.rs`).
+pub const FRAMING: &str = "world/cloth/framing";
 /// The cloth surface.
 pub const MESH: &str = "world/cloth/mesh";
 /// Where the cloth passes through itself: a point where each crossing
