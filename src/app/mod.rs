@@ -7,7 +7,9 @@
 //! - [`history`]: checkpoints, for branching a run from any frame;
 //! - [`panel`]: the tuning panel;
 //! - [`preset_diff`]: what a tuning changed against its preset (run names,
-//!   saving as `extend` plus changed keys).
+//!   saving as `extend` plus changed keys);
+//! - [`ruler`]: a drag on the viewer's time ruler scrubs instead of making
+//!   a loop selection.
 //!
 //! The viewer is fed in-process: every message of the session's recording
 //! streams goes into a `re_log_channel` that the embedded viewer reads, so
@@ -18,6 +20,7 @@
 pub mod history;
 pub mod panel;
 pub mod preset_diff;
+pub mod ruler;
 pub mod session;
 
 use std::path::PathBuf;
@@ -64,6 +67,8 @@ pub struct WeftApp {
     /// With `--screenshot`: how far (simulated seconds) the viewer's time
     /// cursor was at most behind the simulation while playing.
     lag: f64,
+    /// A drag begun on the viewer's time ruler, moved to scrub.
+    scrub: ruler::Scrub,
 }
 
 impl eframe::App for WeftApp {
@@ -93,7 +98,12 @@ impl eframe::App for WeftApp {
     /// The simulation's keys that the viewer would take for its timeline
     /// (Space, →, Backspace) are handed to the panel as its function keys
     /// before the viewer sees them, unless a text field is being typed in.
+    ///
+    /// A press on the viewer's time ruler, and its drag, move the time
+    /// cursor instead of making a loop selection ([`ruler`]).
     fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        let ruler = ctx.viewport(|v| ruler::find(&v.prev_pass.widgets));
+        self.scrub.remap(&mut raw_input.events, ruler);
         if !ctx.text_edit_focused() {
             panel::take_simulation_keys(&mut raw_input.events);
         }
@@ -302,6 +312,7 @@ pub fn run(
                 session,
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
                 lag: 0.0,
+                scrub: ruler::Scrub::default(),
             }))
         }),
     );
