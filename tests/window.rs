@@ -4,8 +4,10 @@
 //! not depend on how X presents the window.
 //!
 //! `UPDATE_SNAPSHOTS=1 cargo test --test window` also copies the picture to
-//! `tests/snapshots/window.png` (shown in the README). It is not compared
-//! pixel for pixel: the panel shows timings.
+//! `tests/snapshots/window.png` (shown in the README), and each shipped
+//! preset's first 3D view to `tests/snapshots/first_view/`. They are not
+//! compared pixel for pixel: the panel shows timings, and the tests check
+//! what matters in them instead.
 #![cfg(feature = "viewer")]
 
 use std::process::Command;

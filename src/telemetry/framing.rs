@@ -1,7 +1,7 @@
 //! What the desktop debugger's camera frames: two points that tell the
 //! viewer how far back to stand from the cloth.
 //!
-//! The debugger's 3D view tracks an entity ([`paths::FRAMING`]): the
+//! The debugger's 3D view tracks an entity ([`super::paths::FRAMING`]): the
 //! viewer keeps the camera on the centre of that entity's "region of
 //! interest" as it moves, at a distance fixed when tracking starts, 1.5
 //! times the radius of that region (`re_view_spatial`'s `eye.rs`). For a
