@@ -819,6 +819,160 @@ fn a_branch_draws_its_parent_beside_it() {
     assert_eq!(count("/metrics/normals/parent"), Some(11));
 }
 
+/// What a session logged of one entity, per recording: each row's frame
+/// and 3-vectors (a mesh's vertex positions, or points).
+type Logged = std::collections::BTreeMap<String, Vec<(i64, Vec<[f32; 3]>)>>;
+
+/// A session of `preset` that keeps, per recording, the ghost's vertex
+/// positions and the particles' positions at each logged frame.
+fn session_logging_the_ghost(
+    preset: &str,
+) -> (Session, std::sync::Arc<std::sync::Mutex<[Logged; 2]>>) {
+    let logged = std::sync::Arc::new(std::sync::Mutex::new([Logged::new(), Logged::new()]));
+    let sink = logged.clone();
+    let loaded = load::load(preset, &[]).unwrap();
+    let session = Session::start(loaded, preset.into(), move |msg: &rerun::log::LogMsg| {
+        let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg else {
+            return;
+        };
+        let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
+        let entity = chunk.entity_path().to_string();
+        let (k, component) = if entity == format!("/{}", paths::GHOST) {
+            (0, rerun::Mesh3D::descriptor_vertex_positions().component)
+        } else if entity == format!("/{}", paths::PARTICLES) {
+            (1, rerun::Points3D::descriptor_positions().component)
+        } else {
+            return;
+        };
+        if chunk.is_static() {
+            return;
+        }
+        let frames = chunk.iter_component_indices(paths::FRAME.into(), component);
+        let values = chunk.iter_slices::<[f32; 3]>(component);
+        let mut logged = sink.lock().unwrap();
+        let rows = logged[k]
+            .entry(store.recording_id().to_string())
+            .or_default();
+        for ((frame, _), x) in frames.zip(values) {
+            rows.push((frame.as_i64(), x.to_vec()));
+        }
+    })
+    .unwrap();
+    (session, logged)
+}
+
+/// A branch draws its parent's cloth, faint, in its 3D view: at every
+/// frame it logs, the parent's positions at that frame, where its own
+/// cloth, with another curvature weight, has moved elsewhere. The panel's
+/// "parent as a ghost" box (on) turns it off (the ghost is cleared at
+/// once and no longer drawn) and on again.
+#[test]
+fn a_branch_draws_its_parent_as_a_ghost() {
+    let (session, logged) = session_logging_the_ghost("hanging_sheet");
+    for _ in 0..10 {
+        session.send(Command::Step);
+    }
+    assert!(session.wait_for(WAIT, |s| s.frame == 10));
+    let parent = session.status().run.recording_id;
+    let mut tuning = weft::scene::Tuning::of(session.status().preset.as_ref().unwrap());
+    tuning.solver.weights[Family::Curvature] = 0.35;
+    session.send(Command::Tune(tuning));
+    session.send(Command::Branch(BranchAt::Frame(5)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    for frame in 6..=8 {
+        session.send(Command::Step);
+        assert!(session.wait_for(WAIT, |s| s.frame == frame));
+    }
+    let branch = session.status().run.recording_id;
+    // The streams send what was logged in batches, every few milliseconds.
+    let arrived = |n: usize| {
+        session.wait_for(WAIT, |_| {
+            let logged = logged.lock().unwrap();
+            let last = |k: usize| {
+                logged[k]
+                    .get(&branch)
+                    .and_then(|rows| rows.last().map(|r| r.0))
+            };
+            logged[0].get(&branch).is_some_and(|rows| rows.len() >= n) && last(1) == Some(8)
+        })
+    };
+    assert!(arrived(4));
+    {
+        let [ghost, particles] = &*logged.lock().unwrap();
+        assert!(!ghost.contains_key(&parent), "the first run has no parent");
+        let drawn = &ghost[&branch];
+        assert_eq!(
+            drawn.iter().map(|(f, _)| *f).collect::<Vec<_>>(),
+            vec![5, 6, 7, 8]
+        );
+        let at = |rows: &[(i64, Vec<[f32; 3]>)], frame: i64| {
+            rows.iter().rfind(|(f, _)| *f == frame).unwrap().1.clone()
+        };
+        for frame in 5..=8 {
+            assert_eq!(
+                at(drawn, frame),
+                at(&particles[&parent], frame),
+                "the ghost at frame {frame} is the parent's cloth"
+            );
+        }
+        assert_ne!(
+            at(&particles[&branch], 8),
+            at(&particles[&parent], 8),
+            "the branch's own cloth has moved elsewhere"
+        );
+    }
+
+    let mut h = harness(State {
+        panel: Panel::new(&session.status()),
+        session,
+    });
+    h.run();
+    let ghost_rows = |logged: &std::sync::Mutex<[Logged; 2]>| {
+        logged.lock().unwrap()[0][&branch]
+            .iter()
+            .map(|(f, x)| (*f, x.len()))
+            .collect::<Vec<_>>()
+    };
+    let n = ghost_rows(&logged)[0].1;
+    assert!(n > 0);
+    let checked = |h: &Harness<'_, State>| {
+        h.get_by_label("parent as a ghost")
+            .accesskit_node()
+            .toggled()
+            == Some(egui::accesskit::Toggled::True)
+    };
+    assert!(checked(&h), "on for a branch");
+    click(&mut h, "parent as a ghost");
+    assert!(!checked(&h));
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |_| ghost_rows(&logged).len() == 5),
+        "turned off, the ghost is cleared at once"
+    );
+    assert_eq!(ghost_rows(&logged)[4], (8, 0));
+    click(&mut h, "Step");
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 9));
+    assert_eq!(ghost_rows(&logged).len(), 5, "and no longer drawn");
+    click(&mut h, "parent as a ghost");
+    assert!(checked(&h));
+    assert!(
+        h.state()
+            .session
+            .wait_for(WAIT, |_| ghost_rows(&logged).len() == 6),
+        "turned on, it is drawn at once"
+    );
+    assert_eq!(ghost_rows(&logged)[5], (9, n));
+}
+
+/// A run that is not a branch has no ghost to draw, and no box for it.
+#[test]
+fn only_a_branch_offers_the_ghost() {
+    let mut h = harness(state("hanging_sheet"));
+    h.run();
+    assert!(h.query_by_label("parent as a ghost").is_none());
+}
+
 /// A preset file as the base: named relative to the saved file when they
 /// share a directory, else by its absolute path; both load back.
 #[test]

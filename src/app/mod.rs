@@ -7,7 +7,9 @@
 //! - [`history`]: checkpoints, for branching a run from any frame;
 //! - [`panel`]: the tuning panel;
 //! - [`preset_diff`]: what a tuning changed against its preset (run names,
-//!   saving as `extend` plus changed keys).
+//!   saving as `extend` plus changed keys);
+//! - [`ruler`]: a drag on the viewer's time ruler scrubs instead of making
+//!   a loop selection.
 //!
 //! The viewer is fed in-process: every message of the session's recording
 //! streams goes into a `re_log_channel` that the embedded viewer reads, so
@@ -18,6 +20,7 @@
 pub mod history;
 pub mod panel;
 pub mod preset_diff;
+pub mod ruler;
 pub mod session;
 
 use std::path::PathBuf;
@@ -64,6 +67,8 @@ pub struct WeftApp {
     /// With `--screenshot`: how far (simulated seconds) the viewer's time
     /// cursor was at most behind the simulation while playing.
     lag: f64,
+    /// A drag begun on the viewer's time ruler, moved to scrub.
+    scrub: ruler::Scrub,
 }
 
 impl eframe::App for WeftApp {
@@ -94,7 +99,12 @@ impl eframe::App for WeftApp {
     /// The simulation's keys that the viewer would take for its timeline
     /// (Space, →, Backspace) are handed to the panel as its function keys
     /// before the viewer sees them, unless a text field is being typed in.
+    ///
+    /// A press on the viewer's time ruler, and its drag, move the time
+    /// cursor instead of making a loop selection ([`ruler`]).
     fn raw_input_hook(&mut self, ctx: &egui::Context, raw_input: &mut egui::RawInput) {
+        let ruler = ctx.viewport(|v| ruler::find(&v.prev_pass.widgets));
+        self.scrub.remap(&mut raw_input.events, ruler);
         if !ctx.text_edit_focused() {
             panel::take_simulation_keys(&mut raw_input.events);
         }
@@ -266,13 +276,20 @@ pub fn run(
         .viewport
         .with_app_id("weft")
         .with_inner_size([1400.0, 860.0]);
+    // A screenshot shows the window as it opens, whatever the last window
+    // on this machine left: it reads and writes its state (the window's
+    // size, egui's memory) in a scratch file of its own, not the user's.
+    let scratch = screenshot
+        .as_ref()
+        .map(|_| std::env::temp_dir().join(format!("weft-screenshot-{}.ron", std::process::id())));
+    options.persistence_path = scratch.clone();
     let startup = re_viewer::StartupOptions {
         on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
         // A screenshot shows the window as it opens, not as last left.
         persist_state: screenshot.is_none(),
         ..Default::default()
     };
-    eframe::run_native(
+    let ran = eframe::run_native(
         "weft",
         options,
         Box::new(move |cc| {
@@ -296,8 +313,13 @@ pub fn run(
                 session,
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
                 lag: 0.0,
+                scrub: ruler::Scrub::default(),
             }))
         }),
-    )
-    .map_err(|e| anyhow::anyhow!("the window failed: {e}"))
+    );
+    if let Some(scratch) = scratch {
+        // Nothing to keep; a file the window never wrote is not an error.
+        std::fs::remove_file(scratch).ok();
+    }
+    ran.map_err(|e| anyhow::anyhow!("the window failed: {e}"))
 }

@@ -105,9 +105,15 @@ fn layout(views: Views) -> (Blueprint, Extras) {
 
 /// The entities of the 3D view a click does not select in the desktop
 /// debugger, so that a click on the cloth reaches its mesh and particles:
-/// the arrows drawn over it, the bodies and the colliders (and the normals,
-/// hidden there).
-pub const NOT_PICKED: [&str; 3] = ["world/corrections", "world/bodies", "world/colliders"];
+/// the arrows drawn over it, the bodies, the colliders and a branch's
+/// parent drawn as a ghost (and the normals, hidden there).
+pub const NOT_PICKED: [&str; 5] = [
+    "world/cloth/framing",
+    "world/corrections",
+    "world/bodies",
+    "world/colliders",
+    "world/ghost",
+];
 
 /// A particle's radius in the desktop debugger's 3D view, in UI points:
 /// small dots on the shaded mesh, whatever the distance.
@@ -118,10 +124,11 @@ pub const PARTICLE_UI_RADIUS: f32 = 1.5;
 /// the selection on the right, the streams under the timeline: each opens
 /// from the viewer's top bar), and in the 3D view
 ///
-/// - the camera following the cloth ([`paths::PARTICLES`]) at the distance
-///   that frames it (until you move the camera);
+/// - the camera following the cloth, [`super::framing::DISTANCE`] times
+///   its radius away, by tracking [`paths::FRAMING`] (until you move the
+///   camera);
 /// - the particles drawn [`PARTICLE_UI_RADIUS`] points wide;
-/// - clicks passing through the arrows, bodies and colliders
+/// - clicks passing through the arrows, bodies, colliders and the ghost
 ///   ([`NOT_PICKED`]);
 /// - the element normals ([`paths::NORMALS`]) hidden (their ticks pattern
 ///   the mesh; the view's entity tree shows them again);
@@ -178,7 +185,7 @@ fn messages(
     if desktop {
         bp.log(
             format!("{}/EyeControls3D", extras.cloth),
-            &EyeControls3D::new().with_tracking_entity(paths::PARTICLES),
+            &EyeControls3D::new().with_tracking_entity(paths::FRAMING),
         )?;
         for entity in NOT_PICKED {
             bp.log(

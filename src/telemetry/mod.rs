@@ -10,8 +10,10 @@
 //! | `world` | Z-up view coordinates | static |
 //! | `world/cloth/particles` | points, coloured by `color_by` | summary |
 //! | `world/cloth/particles` | per particle: `i`, `j` (static); `strain`, `normal_offset`, `violation_{family}`, `dx_{family}`, `dtheta_{family}` (families that turn), as `f32` | full, with `set_particle_values` (the debugger) |
+//! | `world/cloth/framing` | two points the debugger's camera tracks, drawn with no radius (`framing.rs`) | summary, with `set_framing` (the debugger) |
 //! | `world/cloth/mesh` | the cloth surface (`full.rs`, with the normals, the corrections and the hover values) | full |
 //! | `world/cloth/normals` | element normals (arrows) | full |
+//! | `world/ghost/mesh` | another run's cloth, faint (`ghost.rs`: a branch's parent, in the debugger) | triangles static; positions and normals at the frames logged |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows, each at most the cloth's longer side long) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, as δx's), families that turn | full |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
@@ -35,7 +37,9 @@ pub mod blueprint;
 mod changes;
 mod colliders;
 pub mod color;
+pub mod framing;
 mod full;
+pub mod ghost;
 pub mod paths;
 pub mod read;
 
@@ -120,6 +124,8 @@ pub struct Telemetry {
     /// Time spent logging the previous frame (reported with the next).
     last_cost: Duration,
     particle_values: bool,
+    /// Whether each frame logs the points the debugger's camera frames.
+    framing: bool,
     /// Whether level full draws the correction arrows (of the families on
     /// in the settings).
     arrows: bool,
@@ -145,6 +151,7 @@ impl Telemetry {
             last_poses: Vec::new(),
             last_cost: Duration::ZERO,
             particle_values: false,
+            framing: false,
             arrows: true,
             drawn: full::Drawn::default(),
             crossings_drawn: false,
@@ -171,6 +178,13 @@ impl Telemetry {
     /// `weft record` leaves it off (it adds about a third to a full file).
     pub fn set_particle_values(&mut self, on: bool) {
         self.particle_values = on;
+    }
+
+    /// Whether each logged frame also logs [`framing::points`] at
+    /// [`paths::FRAMING`], which the desktop debugger's camera tracks; off
+    /// for `weft record`.
+    pub fn set_framing(&mut self, on: bool) {
+        self.framing = on;
     }
 
     /// Whether level full draws the correction arrows at all (of the
@@ -520,6 +534,14 @@ impl Telemetry {
                 .with_colors(colours.iter().copied())
                 .with_radii([radius]),
         )?;
+        if self.framing
+            && let Some(points) = framing::points(x)
+        {
+            rec.log(
+                paths::FRAMING,
+                &rerun::Points3D::new(points).with_radii([0.0]),
+            )?;
+        }
         colliders::log_planes(rec, scene, x)?;
         self.log_crossings(scene, radius)?;
 

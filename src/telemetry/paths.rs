@@ -11,11 +11,17 @@ pub const SIM_TIME: &str = "sim_time";
 pub const WORLD: &str = "world";
 /// Particles.
 pub const PARTICLES: &str = "world/cloth/particles";
+/// What the desktop debugger's camera tracks: two points about the cloth
+/// that set how far back it stands (`framing.rs`).
+pub const FRAMING: &str = "world/cloth/framing";
 /// The cloth surface.
 pub const MESH: &str = "world/cloth/mesh";
 /// Where the cloth passes through itself: a point where each crossing
 /// edge meets its triangle.
 pub const CROSSINGS: &str = "world/cloth/crossings";
+/// Another run's cloth drawn faint beside this one (in the desktop
+/// debugger, a branch's parent).
+pub const GHOST: &str = "world/ghost/mesh";
 /// Element normals.
 pub const NORMALS: &str = "world/cloth/normals";
 /// Static topology (index arrays).

@@ -15,6 +15,7 @@
 //! applies at the next step and is logged at the frame it takes effect.
 
 mod runs;
+pub mod trace;
 mod worker;
 
 use std::path::PathBuf;
@@ -68,6 +69,9 @@ pub enum Command {
     Branch(BranchAt),
     /// Which particle the inspector follows.
     Inspect(Option<usize>),
+    /// Whether a branch's 3D view draws its parent's cloth, faint, beside
+    /// its own (on at start; kept for later runs).
+    Ghost(bool),
 }
 
 /// What the viewer last showed, for pacing the simulation to it.

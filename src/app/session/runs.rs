@@ -173,6 +173,8 @@ pub(super) fn open(
     telemetry.forget();
     // For hovering a particle in the viewer (at level full).
     telemetry.set_particle_values(true);
+    // For the camera, which frames the cloth by tracking them.
+    telemetry.set_framing(true);
     // The correction arrows cover the cloth: the panel turns them on.
     telemetry.set_arrows(false);
     telemetry.send_drawings_whole();

@@ -1,5 +1,10 @@
 //! The simulation thread's state and loop: commands in, steps at real-time
-//! pace, status out.
+//! pace (here), runs started and ended (`lifecycle`), status out
+//! (`publish`), a branch's parent drawn as a ghost (`ghost`).
+
+mod ghost;
+mod lifecycle;
+mod publish;
 
 use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
@@ -10,16 +15,15 @@ use rerun::sink::FileSink;
 
 use super::SessionError;
 use crate::app::history::History;
-use crate::record::{Check, Run, verdict};
-use crate::scene::{Loaded, Scene, load};
-use crate::solver::{Family, PerFamily};
+use crate::record::Run;
+use crate::scene::{Loaded, load};
+use crate::solver::Family;
 use crate::telemetry::Collect;
 
 use super::runs::{Forward, SERIES_VALUES, Start, Tee, open};
-use super::{
-    BranchAt, Command, FOLLOWING, MAX_LEAD, ParticleReadout, RunInfo, Series, Shown, Status, Waker,
-    verdict_text,
-};
+use super::trace::Trace;
+use super::{BranchAt, Command, FOLLOWING, MAX_LEAD, RunInfo, Series, Shown, Status, Waker};
+use ghost::Ghost;
 
 /// What the simulation thread owns: the current run and its history, every
 /// run of the session, the stream of the current one, and the pacing.
@@ -27,6 +31,12 @@ pub(super) struct Worker {
     run: Run,
     history: History,
     series: Series,
+    /// The run's cloth, frame by frame (a branch's ghost of its parent).
+    trace: Trace,
+    /// A branch's parent, drawn faint beside its cloth.
+    ghost: Option<Ghost>,
+    /// Whether the ghost is drawn.
+    show_ghost: bool,
     info: RunInfo,
     runs: Vec<RunInfo>,
     loaded: Loaded,
@@ -80,6 +90,9 @@ impl Worker {
             run: opened.run,
             history: opened.history,
             series: Series::new(),
+            trace: Trace::default(),
+            ghost: None,
+            show_ghost: true,
             runs: vec![opened.info.clone()],
             info: opened.info,
             loaded,
@@ -102,6 +115,7 @@ impl Worker {
             drawing_behind: false,
         };
         worker.diagnose();
+        worker.keep_frame();
         worker.publish();
         Ok(worker)
     }
@@ -258,6 +272,10 @@ impl Worker {
                 self.inspect = p.filter(|&i| i < n);
                 self.diagnose();
             }
+            Command::Ghost(on) => {
+                self.show_ghost = on;
+                self.draw_ghost(true);
+            }
         }
         self.publish();
     }
@@ -309,137 +327,6 @@ impl Worker {
         });
     }
 
-    /// The loaded preset with the current tuning and telemetry settings.
-    fn current_loaded(&self) -> Loaded {
-        let tuning = self.run.scene.tuning();
-        let mut loaded = self.loaded.clone();
-        tuning.apply_to(&mut loaded.preset);
-        loaded.preset.telemetry = *self.run.telemetry.settings();
-        loaded.resolved = load::to_toml(&loaded.preset);
-        loaded
-    }
-
-    fn branch(&mut self, at: BranchAt) {
-        let last = self.history.last_frame();
-        let frame = match at {
-            BranchAt::Frame(f) => f,
-            BranchAt::Time(t) => self.history.frame_at(t),
-        };
-        if frame > last {
-            return self.set_error(Some(format!(
-                "cannot branch at frame {frame}: run #{} has reached frame {last}",
-                self.info.number
-            )));
-        }
-        let tuning = self.run.scene.tuning();
-        match self.history.state_at(frame) {
-            Ok(snapshot) => {
-                let history = self.history.branch(frame, tuning);
-                let parent_series = self.series.clone();
-                self.playing = false;
-                if self.begin(
-                    Start::Branch {
-                        snapshot: Box::new(snapshot),
-                        history: Box::new(history),
-                        tuning,
-                        parent_series,
-                    },
-                    None,
-                ) {
-                    // The two runs are the same up to the branch frame.
-                    self.series.retain(|(f, _, _)| *f <= frame);
-                }
-            }
-            Err(e) => self.set_error(Some(format!("cannot branch at frame {frame}: {e}"))),
-        }
-    }
-
-    /// Ends the current run and starts a new one; false if it could not.
-    fn begin(&mut self, start: Start, file: Option<FileSink>) -> bool {
-        let number = self.runs.len() as u32 + 1;
-        let parent = match &start {
-            Start::Branch { snapshot, .. } => Some((
-                self.info.number,
-                self.info.recording_id.clone(),
-                snapshot.scene.frame(),
-            )),
-            Start::Fresh(_) => None,
-        };
-        let info = RunInfo {
-            number,
-            parent,
-            ..RunInfo::default()
-        };
-        let settings = *self.run.telemetry.settings();
-        let arrows = self.run.telemetry.arrows();
-        // The base a run's name is described against: the preset as named.
-        let base = load::load(&self.name, &[]).ok().map(|l| l.preset);
-        match open(&self.forward, start, &self.name, info, settings, base, file) {
-            Ok(opened) => {
-                // A new run starts with a clean status; what goes wrong in
-                // closing the old one still shows.
-                self.set_error(None);
-                self.finish();
-                self.stop_recording();
-                if opened.info.parent.is_none() {
-                    self.series.clear();
-                }
-                self.tee = opened.tee;
-                // The speed readouts are the new run's.
-                self.recent.clear();
-                self.status.lock().expect("not poisoned").step_ms = 0.0;
-                let old = std::mem::replace(&mut self.rec, opened.rec);
-                let flushed = old.flush_blocking();
-                self.run = opened.run;
-                self.run.telemetry.set_arrows(arrows);
-                self.diagnose();
-                self.history = opened.history;
-                self.info = opened.info.clone();
-                self.runs.push(opened.info);
-                if let Err(e) = flushed {
-                    self.set_error(Some(format!("the previous run: {e}")));
-                }
-                true
-            }
-            Err(e) => {
-                self.set_error(Some(e.to_string()));
-                false
-            }
-        }
-    }
-
-    /// Logs the run's summary and its result properties, and flushes; a
-    /// failure shows in the status.
-    fn finish(&mut self) {
-        if let Err(e) = self.end_run() {
-            self.set_error(Some(format!("ending the run: {e}")));
-        }
-    }
-
-    fn end_run(&mut self) -> Result<(), SessionError> {
-        let figures = self.run.log_summary()?;
-        let checks = verdict(self.run.scene.preset().expect.as_ref(), &figures);
-        self.rec.send_property(
-            "result",
-            &rerun::AnyValues::default()
-                .with_component::<rerun::components::Text>("frames", [figures.frames.to_string()])
-                .with_component::<rerun::components::Text>(
-                    "final_state",
-                    [figures.final_state.clone()],
-                )
-                .with_component::<rerun::components::Text>("verdict", [verdict_text(&checks)]),
-        )?;
-        Ok(self.rec.flush_blocking()?)
-    }
-
-    /// Closes the recording file, if there is one.
-    fn stop_recording(&mut self) {
-        if let Err(e) = self.tee.stop() {
-            self.set_error(Some(e.to_string()));
-        }
-        self.recording = None;
-    }
-
     /// Whether the next frame is sent with its drawing: always, but while
     /// playing paced to a window, only once the window has drawn since the
     /// last drawing was sent (the frames in between send their scalars).
@@ -475,6 +362,8 @@ impl Worker {
                     values[2 + Family::COUNT] = d.orientation.flipped;
                     self.series.push((frame, run.scene.time(), values));
                 }
+                self.keep_frame();
+                self.draw_ghost(false);
             }
             Err(e) => {
                 self.playing = false;
@@ -495,122 +384,4 @@ impl Worker {
         drop(s);
         self.publish_progress();
     }
-
-    fn set_error(&self, e: Option<String>) {
-        self.status.lock().expect("not poisoned").error = e;
-        self.wake();
-    }
-
-    /// Tells the window that the status changed.
-    fn wake(&self) {
-        let waker = self.waker.lock().expect("not poisoned").clone();
-        if let Some(waker) = waker {
-            waker();
-        }
-    }
-
-    /// Publishes everything, the preset included (after a command).
-    fn publish(&self) {
-        let mut preset = self.run.scene.preset().clone();
-        preset.telemetry = *self.run.telemetry.settings();
-        let progress = self.progress();
-        // One lock, so a reader never sees a new run with an old frame.
-        let mut s = self.status.lock().expect("not poisoned");
-        s.preset_name = self.name.clone();
-        s.preset = Some(preset);
-        s.run = self.info.clone();
-        s.runs = self.runs.clone();
-        s.recording = self.recording.clone();
-        s.picked = self.picked;
-        progress.write(&mut s);
-        drop(s);
-        self.wake();
-    }
-
-    /// Publishes what a step changes (the preset does not change on a step).
-    fn publish_progress(&self) {
-        let progress = self.progress();
-        progress.write(&mut self.status.lock().expect("not poisoned"));
-        self.wake();
-    }
-
-    fn progress(&self) -> Progress {
-        let scene = &self.run.scene;
-        let figures = self.run.figures();
-        let checks = verdict(scene.preset().expect.as_ref(), &figures);
-        Progress {
-            frame: scene.frame(),
-            time: scene.time(),
-            playing: self.playing,
-            speed: self.speed,
-            steps_per_second: self.recent.len() as f32,
-            violations: scene.solver().diagnostics().map(|d| {
-                let crossings = d.self_crossings.unwrap_or(0);
-                (
-                    d.families.map(|_, f| f.violation.max),
-                    d.max_strain,
-                    crossings,
-                )
-            }),
-            digest: figures.final_state,
-            checks,
-            checkpoints: self.history.checkpoints(),
-            particle: self.inspect.map(|i| readout(scene, i)),
-        }
-    }
-}
-
-/// What a step changes in the [`Status`], gathered before taking its lock.
-struct Progress {
-    frame: u64,
-    time: f64,
-    playing: bool,
-    speed: f32,
-    steps_per_second: f32,
-    violations: Option<(PerFamily<f32>, f32, usize)>,
-    digest: String,
-    checks: Vec<Check>,
-    checkpoints: (usize, u64),
-    particle: Option<ParticleReadout>,
-}
-
-impl Progress {
-    fn write(self, s: &mut Status) {
-        s.frame = self.frame;
-        s.time = self.time;
-        s.playing = self.playing;
-        s.speed = self.speed;
-        s.steps_per_second = self.steps_per_second;
-        if let Some((max_violation, max_strain, crossings)) = self.violations {
-            s.max_violation = max_violation;
-            s.max_strain = max_strain;
-            s.crossings = crossings;
-        }
-        s.digest = self.digest;
-        s.checks = self.checks;
-        s.checkpoints = self.checkpoints;
-        s.particle = self.particle;
-    }
-}
-
-/// What the inspector shows of particle `i`.
-fn readout(scene: &Scene, i: usize) -> ParticleReadout {
-    let solver = scene.solver();
-    let mut r = ParticleReadout {
-        index: i,
-        cell: solver.spec().cell(i),
-        strain: solver.particle_strain_at(i),
-        normal_offset: solver.normal_offset_at(i),
-        ..ParticleReadout::default()
-    };
-    let corrections = solver.diagnostics().filter(|d| d.corrections);
-    r.corrections = corrections.is_some();
-    for f in Family::ALL {
-        r.violation[f] = solver.particle_violation_at(f, i);
-        if let Some(d) = corrections {
-            r.dx[f] = d.family(f).dx[i];
-            r.dtheta[f] = d.family(f).dtheta[i];
-        }
-    }
-    r
 }
