@@ -1376,3 +1376,69 @@ fn play_to_stops_at_its_frame() {
     std::thread::sleep(Duration::from_millis(200));
     assert_eq!(session.status().frame, 40);
 }
+
+/// Paced to a window, a playing session sends a frame's drawing only once
+/// the window has drawn since the last one (the frames in between send
+/// their scalars), and each drawing is whole: particles and mesh of the
+/// same frame. Stopped, the frame it stopped on is drawn.
+#[test]
+fn a_paced_window_is_sent_a_drawing_per_frame_it_draws() {
+    use std::collections::{BTreeMap, BTreeSet};
+    type Frames = BTreeMap<String, BTreeSet<i64>>;
+    let logged = std::sync::Arc::new(std::sync::Mutex::new(Frames::new()));
+    let sink = logged.clone();
+    let set = ["telemetry.level=full".parse().unwrap()];
+    let loaded = load::load("hanging_sheet", &set).unwrap();
+    let session = Session::start(
+        loaded,
+        "hanging_sheet".into(),
+        move |msg: &rerun::log::LogMsg| {
+            let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg else {
+                return;
+            };
+            if !store.is_recording() {
+                return;
+            }
+            let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
+            let Some(frames) = chunk.timelines().get(&paths::FRAME.into()) else {
+                return;
+            };
+            let entity = chunk.entity_path().to_string();
+            let mut logged = sink.lock().unwrap();
+            logged
+                .entry(entity)
+                .or_default()
+                .extend(frames.times_raw().iter().copied());
+        },
+    )
+    .unwrap();
+    session.pace_to_viewer();
+    session.send(Command::PlayTo(60));
+    let mut draws = 0;
+    while !session.wait_for(Duration::from_millis(100), |s| s.frame >= 60 && !s.playing) {
+        session.window_drew();
+        draws += 1;
+        assert!(draws < 2000, "the run did not reach frame 60");
+    }
+    drop(session);
+    let logged = logged.lock().unwrap();
+    let frames = |path: &str| logged.get(&format!("/{path}")).cloned().unwrap_or_default();
+    let (strain, particles, mesh) = (
+        frames(paths::STRAIN),
+        frames(paths::PARTICLES),
+        frames(paths::MESH),
+    );
+    // Every frame's scalars.
+    assert_eq!(strain, (1..=60).collect(), "{strain:?}");
+    // A drawing per frame the window drew, whole; and the last frame's.
+    assert_eq!(particles, mesh, "a drawing sent in part");
+    assert!(
+        particles.contains(&0) && particles.contains(&60),
+        "{particles:?}"
+    );
+    assert!(
+        particles.len() <= draws + 2 && particles.len() < 60,
+        "{} drawings for {draws} draws: {particles:?}",
+        particles.len()
+    );
+}
