@@ -52,6 +52,7 @@ pub mod forced_rotation;
 pub mod frame;
 pub mod params;
 pub mod portable;
+pub mod pull;
 mod team;
 pub mod topology;
 pub mod update;
@@ -67,6 +68,7 @@ pub use frame::Frame;
 pub use params::{
     ParamError, Params, REFERENCE_COMPLIANCE, Range, RangeError, Weights, Width, compliance_factor,
 };
+pub use pull::Pull;
 pub use topology::Topology;
 pub use update::Environment;
 
@@ -189,6 +191,8 @@ pub struct Solver {
     frame: Frame,
     /// The origin a step before `frame` (to tell a jerk).
     origin_before: DVec3,
+    /// A particle pulled towards a point ([`pull`]), if any.
+    pull: Option<Pull>,
     time: f64,
     steps: u64,
     diagnostics: Option<Box<Diagnostics>>,
@@ -231,6 +235,7 @@ impl Solver {
             state,
             frame: Frame::default(),
             origin_before: DVec3::ZERO,
+            pull: None,
             time: 0.0,
             steps: 0,
             diagnostics: None,
@@ -344,6 +349,21 @@ impl Solver {
         params.validate()?;
         self.params = params;
         Ok(())
+    }
+
+    /// Pulls a particle towards a point from the next step on, or lets go
+    /// (`None`), after checking it against the cloth ([`pull`]).
+    pub fn set_pull(&mut self, pull: Option<Pull>) -> Result<(), ParamError> {
+        if let Some(p) = &pull {
+            p.validate(self.state.len())?;
+        }
+        self.pull = pull;
+        Ok(())
+    }
+
+    /// The pull in force, if any.
+    pub fn pull(&self) -> Option<Pull> {
+        self.pull
     }
 
     /// The parameters in force.
@@ -715,6 +735,16 @@ impl Solver {
             threads,
         );
         self.drive_attachments();
+        if let Some(pull) = &self.pull {
+            let origin = frame.origin_after(sub + 1);
+            pull.apply(
+                &mut self.state.position,
+                &self.mass,
+                &self.inv_mass,
+                origin,
+                dt,
+            );
+        }
         self.check_finite("update")?;
         if let (Some(d), Some(t)) = (self.diagnostics.as_deref_mut(), t) {
             d.timings.update += t.elapsed();
