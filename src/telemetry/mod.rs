@@ -14,6 +14,7 @@
 //! | `world/cloth/normals` | element normals (arrows) | full |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows, each at most the cloth's longer side long) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, as δx's), families that turn | full |
+//! | `world/pull` | the debugger's pull: a line from the pulled particle to its target, while there is one (`pull.rs`) | summary |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
 //! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth (`colliders.rs`) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
@@ -37,6 +38,7 @@ mod colliders;
 pub mod color;
 mod full;
 pub mod paths;
+mod pull;
 pub mod read;
 
 pub use changes::describe_changes;
@@ -116,6 +118,8 @@ pub struct Telemetry {
     drawn: full::Drawn,
     /// Whether the last logged frame marked crossings.
     crossings_drawn: bool,
+    /// Whether the last logged frame drew a pull.
+    pull_drawn: bool,
 }
 
 impl Telemetry {
@@ -131,6 +135,7 @@ impl Telemetry {
             arrows: true,
             drawn: full::Drawn::default(),
             crossings_drawn: false,
+            pull_drawn: false,
         }
     }
 
@@ -445,6 +450,7 @@ impl Telemetry {
         )?;
         colliders::log_planes(rec, scene, x)?;
         self.log_crossings(scene, radius)?;
+        pull::log(&self.rec, scene, x, radius, &mut self.pull_drawn)?;
 
         if self.settings.level == Level::Full {
             self.log_full(scene, radius)?;

@@ -18,6 +18,8 @@ pub const MESH: &str = "world/cloth/mesh";
 pub const CROSSINGS: &str = "world/cloth/crossings";
 /// Element normals.
 pub const NORMALS: &str = "world/cloth/normals";
+/// The debugger's pull: a line from the pulled particle to its target.
+pub const PULL: &str = "world/pull";
 /// Static topology (index arrays).
 pub const TOPOLOGY: &str = "cloth/topology";
 /// Solver parameters, logged at every change.
