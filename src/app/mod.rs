@@ -18,6 +18,7 @@
 pub mod history;
 pub mod panel;
 pub mod preset_diff;
+pub mod pull;
 pub mod session;
 
 use std::path::PathBuf;

@@ -68,6 +68,16 @@ pub enum Command {
     Branch(BranchAt),
     /// Which particle the inspector follows.
     Inspect(Option<usize>),
+    /// Grab the particle nearest this point (world coordinates, at the
+    /// current frame): from the next step it is pulled with a spring
+    /// towards where it is now, until [`Command::Release`]
+    /// ([`crate::app::pull`]).
+    Grab([f32; 3]),
+    /// Move the grabbed particle's target (world coordinates) from the
+    /// next step on.
+    PullTo([f64; 3]),
+    /// Let go of the grabbed particle from the next step on.
+    Release,
 }
 
 /// What the viewer last showed, for pacing the simulation to it.
@@ -165,6 +175,8 @@ pub struct Status {
     pub checkpoints: (usize, u64),
     /// The inspected particle.
     pub particle: Option<ParticleReadout>,
+    /// The grabbed particle, where it is and where it is pulled to.
+    pub pull: Option<crate::app::pull::Pulled>,
     /// The last [`Command::InspectNear`]'s particle, with how many have
     /// been handled (so the panel sees each once).
     pub picked: Option<(u64, usize)>,

@@ -10,6 +10,7 @@ use rerun::sink::FileSink;
 
 use super::SessionError;
 use crate::app::history::History;
+use crate::app::pull::{self, Pulled};
 use crate::record::{Check, Run, verdict};
 use crate::scene::{Loaded, Scene, load};
 use crate::solver::{Family, PerFamily};
@@ -176,7 +177,9 @@ impl Worker {
                 self.begin(Start::Fresh(Box::new(loaded)), None);
             }
             Command::Speed(s) => self.speed = s.clamp(0.01, 100.0),
-            Command::Tune(t) => {
+            Command::Tune(mut t) => {
+                // The panel's tuning has no pull: a grab goes on.
+                t.pull = self.run.scene.tuning().pull;
                 if let Err(e) = self.run.set_tuning(&t) {
                     self.set_error(Some(e.to_string()));
                 }
@@ -221,19 +224,7 @@ impl Worker {
             }
             Command::Branch(at) => self.branch(at),
             Command::InspectNear(at) => {
-                let at = glam::Vec3::from_array(at);
-                let nearest = self
-                    .run
-                    .scene
-                    .world_positions()
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| {
-                        a.1.distance_squared(at)
-                            .total_cmp(&b.1.distance_squared(at))
-                    })
-                    .map(|(i, _)| i);
-                if let Some(i) = nearest {
+                if let Some(i) = pull::nearest(&self.run.scene, glam::Vec3::from_array(at)) {
                     let picks = self.picked.map_or(0, |(n, _)| n) + 1;
                     self.picked = Some((picks, i));
                     self.inspect = Some(i);
@@ -245,8 +236,31 @@ impl Worker {
                 self.inspect = p.filter(|&i| i < n);
                 self.diagnose();
             }
+            Command::Grab(at) => {
+                let grab = pull::grab(&self.run.scene, glam::Vec3::from_array(at));
+                self.set_pull(grab);
+            }
+            Command::PullTo(target) => {
+                if let Some(mut p) = self.run.scene.tuning().pull {
+                    p.target = glam::DVec3::from_array(target);
+                    self.set_pull(Some(p));
+                }
+            }
+            Command::Release => self.set_pull(None),
         }
         self.publish();
+    }
+
+    /// Pulls a particle (or lets go) from the next step: a change of the
+    /// tuning, logged at the frame it takes effect.
+    fn set_pull(&mut self, pull: Option<crate::solver::Pull>) {
+        let tuning = crate::scene::Tuning {
+            pull,
+            ..self.run.scene.tuning()
+        };
+        if let Err(e) = self.run.set_tuning(&tuning) {
+            self.set_error(Some(e.to_string()));
+        }
     }
 
     /// Whether the viewer, following the current run, shows a frame more
@@ -527,6 +541,7 @@ impl Worker {
             checks,
             checkpoints: self.history.checkpoints(),
             particle: self.inspect.map(|i| readout(scene, i)),
+            pull: Pulled::of(scene),
         }
     }
 }
@@ -543,6 +558,7 @@ struct Progress {
     checks: Vec<Check>,
     checkpoints: (usize, u64),
     particle: Option<ParticleReadout>,
+    pull: Option<Pulled>,
 }
 
 impl Progress {
@@ -561,6 +577,7 @@ impl Progress {
         s.checks = self.checks;
         s.checkpoints = self.checkpoints;
         s.particle = self.particle;
+        s.pull = self.pull;
     }
 }
 

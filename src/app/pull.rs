@@ -1,0 +1,343 @@
+//! Grabbing the cloth: Ctrl-drag in the 3D view pulls the particle nearest
+//! the pointer with a spring towards the pointer, as MuJoCo's `simulate`
+//! does with a body.
+//!
+//! Three parts:
+//!
+//! - **The session** turns the gesture into a pull ([`crate::solver::pull`])
+//!   on the run's tuning: [`Command::Grab`](super::session::Command::Grab)
+//!   pulls the particle nearest a point ([`nearest`]) towards where it is,
+//!   with a spring [`stiffness`] that suits the cloth;
+//!   [`Command::PullTo`](super::session::Command::PullTo) moves the target;
+//!   [`Command::Release`](super::session::Command::Release) lets go. Each
+//!   is a change of the tuning from the next step, logged at the frame it
+//!   takes effect, so a recording with a drag replays bit for bit.
+//! - **The probe**, a context system added to the viewer's 3D view class
+//!   ([`Probe`]): each time a 3D view is drawn it notes the view's camera
+//!   (the eye: where it is, how it is turned, its field of view) and the
+//!   point of the scene under the pointer with the entity there, the
+//!   viewer's own picking. The viewer offers these to its views only, so
+//!   the probe hands them to the window through [`PROBED`].
+//! - **The gesture** ([`Gesture`]), in the window: Ctrl and the primary
+//!   button pressed while the pointer is over the cloth grab the particle
+//!   nearest the point under it. The press is taken from the viewer's
+//!   input, so the viewer neither selects nor turns its camera (it rolls
+//!   the camera on Ctrl-drag otherwise); the pointer's moves still reach
+//!   it. While the button is held, the target is where the pointer's ray
+//!   meets the plane through the grabbed point facing the camera: the
+//!   ray from the eye through the pointer, within the 3D view's rectangle
+//!   ([`Eye::ray`]). Releasing the button lets go.
+
+use std::sync::Mutex;
+
+use glam::{DVec3, Quat, Vec2, Vec3};
+
+use re_viewer::external::re_chunk_store::MissingChunkReporter;
+use re_viewer::external::re_log_types::EntityPath;
+use re_viewer::external::re_view_spatial::SpatialViewState;
+use re_viewer::external::re_viewer_context::{
+    IdentifiedViewSystem, ItemContext, ViewContext, ViewContextSystem,
+    ViewContextSystemOncePerFrameResult, ViewQuery, ViewSystemIdentifier,
+};
+
+use crate::scene::Scene;
+use crate::solver::Pull;
+use crate::telemetry::paths;
+
+/// How stiff a grab's spring is, per kilogram of cloth: (2π · 2 Hz)², so
+/// the whole cloth, hanging on the spring alone, would swing at about
+/// 2 Hz. A flag of 0.3 kg gets 47 N/m: half a metre off, 24 N, eight times
+/// its weight.
+pub const STIFFNESS_PER_KG: f32 = 158.0;
+
+/// The spring for a grab of `scene`'s cloth (N/m), from its mass.
+pub fn stiffness(scene: &Scene) -> f32 {
+    let spec = scene.solver().spec();
+    STIFFNESS_PER_KG * spec.density * spec.width * spec.height
+}
+
+/// The particle nearest `at` (world coordinates) at the scene's frame.
+pub fn nearest(scene: &Scene, at: Vec3) -> Option<usize> {
+    scene
+        .world_positions()
+        .iter()
+        .enumerate()
+        .min_by(|a, b| {
+            a.1.distance_squared(at)
+                .total_cmp(&b.1.distance_squared(at))
+        })
+        .map(|(i, _)| i)
+}
+
+/// A grab of the particle nearest `at`: pulled towards where it is now
+/// (so nothing jumps until the target moves), with the cloth's
+/// [`stiffness`].
+pub fn grab(scene: &Scene, at: Vec3) -> Option<Pull> {
+    let particle = nearest(scene, at)?;
+    let local = scene.solver().state().position[particle];
+    Some(Pull {
+        particle,
+        target: scene.solver().frame().world(local),
+        stiffness: stiffness(scene),
+    })
+}
+
+/// The pull as the panel and the window see it, after the last step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pulled {
+    /// The particle pulled.
+    pub particle: usize,
+    /// Where it is (world coordinates).
+    pub at: DVec3,
+    /// Where it is pulled to (world coordinates).
+    pub target: DVec3,
+}
+
+impl Pulled {
+    /// The pull of `scene`, if any.
+    pub fn of(scene: &Scene) -> Option<Self> {
+        let pull = scene.solver().pull()?;
+        let local = scene.solver().state().position[pull.particle];
+        Some(Self {
+            particle: pull.particle,
+            at: scene.solver().frame().world(local),
+            target: pull.target,
+        })
+    }
+}
+
+/// A 3D view's camera, as its last drawing had it (world coordinates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Eye {
+    /// Where it is.
+    pub position: Vec3,
+    /// Its turn from the view's axes (x right, y up, looking down −z).
+    pub rotation: Quat,
+    /// The vertical field of view (radians); none for an orthographic one.
+    pub fov_y: Option<f32>,
+}
+
+impl Eye {
+    /// Which way it looks.
+    pub fn forward(&self) -> Vec3 {
+        self.rotation * Vec3::NEG_Z
+    }
+
+    /// The ray (origin, unit direction) from the camera through `pointer`,
+    /// a point of the screen within `rect` (`min`, `max` corners), where
+    /// the view is drawn. The rectangle's corners span the field of view
+    /// vertically and as much horizontally as its shape gives.
+    pub fn ray(&self, rect: (Vec2, Vec2), pointer: Vec2) -> (Vec3, Vec3) {
+        let size = rect.1 - rect.0;
+        // The pointer from the rectangle's centre, in [-1, 1], y up.
+        let ndc = Vec2::new(
+            2.0 * (pointer.x - rect.0.x) / size.x - 1.0,
+            1.0 - 2.0 * (pointer.y - rect.0.y) / size.y,
+        );
+        match self.fov_y {
+            Some(fov) => {
+                let half = (0.5 * fov).tan();
+                let d = Vec3::new(ndc.x * half * size.x / size.y, ndc.y * half, -1.0);
+                (self.position, (self.rotation * d).normalize_or_zero())
+            }
+            None => {
+                let offset =
+                    self.rotation * Vec3::new(0.5 * ndc.x * size.x, 0.5 * ndc.y * size.y, 0.0);
+                (self.position + offset, self.forward())
+            }
+        }
+    }
+}
+
+/// Where the ray (`origin`, `dir`) meets the plane through `point` facing
+/// `normal`; none if it runs along the plane or the plane is behind it.
+pub fn on_plane(origin: Vec3, dir: Vec3, point: Vec3, normal: Vec3) -> Option<Vec3> {
+    let along = dir.dot(normal);
+    if along.abs() < 1e-6 {
+        return None;
+    }
+    let t = (point - origin).dot(normal) / along;
+    (t > 0.0).then(|| origin + dir * t)
+}
+
+/// What the probe saw at the last drawing of a 3D view.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Probed {
+    /// The view's camera.
+    pub eye: Option<Eye>,
+    /// The point of the scene under the pointer, and whether it is on the
+    /// cloth (its particles or its mesh).
+    pub hovered: Option<(Vec3, bool)>,
+}
+
+/// What the probe last saw, for the window (the viewer builds its systems
+/// itself, from their `Default`: a shared place is how they report).
+pub static PROBED: Mutex<Probed> = Mutex::new(Probed {
+    eye: None,
+    hovered: None,
+});
+
+/// The window's side of a Ctrl-drag.
+#[derive(Clone, Debug, Default)]
+pub struct Gesture {
+    /// While dragging: the grabbed point (world coordinates), the plane's
+    /// normal (the camera's forward at the grab) and the 3D view's
+    /// rectangle.
+    pub drag: Option<Drag>,
+}
+
+/// A drag under way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drag {
+    /// The point grabbed (world coordinates): the plane passes through it.
+    pub point: Vec3,
+    /// The plane's normal: the camera's forward at the grab.
+    pub normal: Vec3,
+    /// The 3D view's rectangle on the screen.
+    pub rect: (Vec2, Vec2),
+    /// The last target sent.
+    pub target: Vec3,
+}
+
+impl Gesture {
+    /// Where the target is with the pointer at `pointer` and the camera at
+    /// `eye`: where the pointer's ray meets the drag's plane.
+    pub fn target(&self, eye: &Eye, pointer: Vec2) -> Option<Vec3> {
+        let d = self.drag?;
+        let (origin, dir) = eye.ray(d.rect, pointer);
+        on_plane(origin, dir, d.point, d.normal)
+    }
+}
+
+/// Of the rectangles `rects` (screen corners), the one whose ray through
+/// `pointer` passes nearest `point`, the scene's point under the pointer:
+/// the 3D view the pointer is over (the viewer says which point is under
+/// the pointer, not where its view is drawn).
+pub fn view_rect(
+    eye: &Eye,
+    rects: impl IntoIterator<Item = (Vec2, Vec2)>,
+    pointer: Vec2,
+    point: Vec3,
+) -> Option<(Vec2, Vec2)> {
+    rects
+        .into_iter()
+        .filter(|(a, b)| b.x > a.x && b.y > a.y)
+        .map(|r| {
+            let (o, d) = eye.ray(r, pointer);
+            let off = (point - o) - d * (point - o).dot(d);
+            (off.length(), r)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, r)| r)
+}
+
+/// The context system the window adds to the viewer's 3D view class: at
+/// each drawing of a 3D view it notes the view's camera and the point of
+/// the scene under the pointer in [`PROBED`] (the view's last frame's: the
+/// viewer updates both while it draws).
+#[derive(Default)]
+pub struct Probe;
+
+impl IdentifiedViewSystem for Probe {
+    fn identifier() -> ViewSystemIdentifier {
+        "WeftPullProbe".into()
+    }
+}
+
+impl ViewContextSystem for Probe {
+    fn execute(
+        &mut self,
+        ctx: &ViewContext<'_>,
+        _missing: &MissingChunkReporter,
+        _query: &ViewQuery<'_>,
+        _once: &ViewContextSystemOncePerFrameResult,
+    ) {
+        let Some(state) = ctx.view_state.as_any().downcast_ref::<SpatialViewState>() else {
+            return;
+        };
+        let eye = state.state_3d.eye_state.last_eye.map(|e| Eye {
+            position: Vec3::from_array(e.world_from_rub_view.translation().to_array()),
+            rotation: Quat::from_array(e.world_from_rub_view.rotation().to_array()),
+            fov_y: e.fov_y,
+        });
+        let hovered = ctx.viewer_ctx.hovered();
+        let point = hovered.iter_item_context().find_map(|c| match c {
+            ItemContext::ThreeD { pos, .. } => *pos,
+            _ => None,
+        });
+        let cloth_paths = [paths::PARTICLES, paths::MESH].map(EntityPath::from);
+        let cloth = hovered
+            .iter_items()
+            .any(|item| item.entity_path().is_some_and(|p| cloth_paths.contains(p)));
+        let mut probed = PROBED.lock().expect("not poisoned");
+        if eye.is_some() {
+            probed.eye = eye;
+        }
+        probed.hovered = point.map(|p| (Vec3::from_array(p.to_array()), cloth));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ray_through_the_centre_is_the_camera_s_forward() {
+        let eye = Eye {
+            position: Vec3::new(0.0, -5.0, 1.0),
+            rotation: Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+            fov_y: Some(1.0),
+        };
+        let rect = (Vec2::new(100.0, 50.0), Vec2::new(500.0, 350.0));
+        let (o, d) = eye.ray(rect, Vec2::new(300.0, 200.0));
+        assert_eq!(o, eye.position);
+        assert!((d - eye.forward()).length() < 1e-6, "{d}");
+        // The top edge's centre is half the field of view up.
+        let (_, up) = eye.ray(rect, Vec2::new(300.0, 50.0));
+        assert!((up.angle_between(d) - 0.5).abs() < 1e-5);
+        assert!(up.z > 0.0, "{up}");
+    }
+
+    #[test]
+    fn a_drag_moves_the_target_in_the_plane_facing_the_camera() {
+        let eye = Eye {
+            position: Vec3::new(0.0, -5.0, 0.0),
+            rotation: Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+            fov_y: Some(1.0),
+        };
+        let rect = (Vec2::ZERO, Vec2::new(400.0, 300.0));
+        let point = Vec3::ZERO;
+        // The rectangle is found from the point under the pointer.
+        let other = (Vec2::new(0.0, 300.0), Vec2::new(400.0, 600.0));
+        let found = view_rect(&eye, [other, rect], Vec2::new(200.0, 150.0), point);
+        assert_eq!(found, Some(rect));
+        let g = Gesture {
+            drag: Some(Drag {
+                point,
+                normal: eye.forward(),
+                rect,
+                target: point,
+            }),
+        };
+        let right = g.target(&eye, Vec2::new(300.0, 150.0)).unwrap();
+        assert!(
+            right.x > 0.5 && right.y.abs() < 1e-5 && right.z.abs() < 1e-5,
+            "{right}"
+        );
+        let up = g.target(&eye, Vec2::new(200.0, 100.0)).unwrap();
+        assert!(up.z > 0.1 && up.x.abs() < 1e-5, "{up}");
+    }
+
+    #[test]
+    fn a_grab_holds_the_nearest_particle_where_it_is() {
+        let preset = crate::scene::load::load("hanging_sheet", &[])
+            .unwrap()
+            .preset;
+        let scene = Scene::new(&preset).unwrap();
+        let x = scene.world_positions();
+        let pull = grab(&scene, x[5] + Vec3::splat(1e-3)).unwrap();
+        assert_eq!(pull.particle, 5);
+        assert_eq!(pull.target.as_vec3(), x[5]);
+        assert!(pull.stiffness > 0.0);
+    }
+}

@@ -1,0 +1,152 @@
+//! Grabbing the cloth in the debugger (Ctrl-drag): the session's grab,
+//! move and release, driven as the window drives them, beside the panel
+//! run with egui_kittest. The grabbed particle follows its target; the
+//! pull is drawn while it lasts; a slider moved meanwhile does not let go;
+//! and a recording of the session replays bit for bit, the drag included.
+#![cfg(feature = "viewer")]
+
+use std::time::Duration;
+
+use egui::accesskit::{Action, ActionData, ActionRequest};
+use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
+use glam::DVec3;
+use weft::app::{
+    panel::Panel,
+    session::{Command, Session},
+};
+use weft::scene::load;
+use weft::telemetry::{paths, read};
+
+struct State {
+    panel: Panel,
+    session: Session,
+}
+
+const WAIT: Duration = Duration::from_secs(20);
+
+fn harness(preset: &str) -> Harness<'static, State> {
+    let loaded = load::load(preset, &[]).unwrap();
+    let session = Session::start(loaded, preset.into(), |_| {}).unwrap();
+    let panel = Panel::new(&session.status());
+    Harness::builder()
+        .with_size([360.0, 1400.0])
+        .build_ui_state(
+            |ui, s: &mut State| s.panel.ui(ui, &s.session),
+            State { panel, session },
+        )
+}
+
+/// Steps `n` frames through the panel's Step button.
+fn step(h: &mut Harness<'_, State>, n: u64) {
+    for _ in 0..n {
+        let next = h.state().session.status().frame + 1;
+        h.get_by_label("Step").click();
+        h.run();
+        assert!(h.state().session.wait_for(WAIT, |s| s.frame == next));
+    }
+}
+
+fn set_slider(h: &mut Harness<'_, State>, label: &str, value: f64) {
+    let (target_node, target_tree) = h
+        .get_by_role_and_label(egui::accesskit::Role::Slider, label)
+        .accesskit_node()
+        .locate();
+    h.event(egui::Event::AccessKitActionRequest(ActionRequest {
+        target_node,
+        target_tree,
+        action: Action::SetValue,
+        data: Some(ActionData::NumericValue(value)),
+    }));
+    h.run();
+}
+
+#[test]
+fn a_drag_pulls_the_particle_and_replays_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("drag.rrd");
+    let mut h = harness("hanging_sheet");
+    h.state_mut().panel.set_record_path(file.to_str().unwrap());
+    h.run();
+    h.get_by_label("Record").click();
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_some()));
+    step(&mut h, 5);
+
+    // Grab beside the lowest particle (a free one: the sheet hangs from
+    // its top row): the particle nearest the point is taken.
+    let preset = h.state().session.status().preset.unwrap();
+    let mut scene = weft::scene::Scene::new(&preset).unwrap();
+    for _ in 0..5 {
+        scene.step().unwrap();
+    }
+    let x = scene.world_positions();
+    let corner = (0..x.len())
+        .min_by(|&a, &b| x[a].z.total_cmp(&x[b].z))
+        .unwrap();
+    let near = x[corner] + glam::Vec3::new(0.0, 0.0, 0.01);
+    let session = &h.state().session;
+    session.send(Command::Grab(near.to_array()));
+    assert!(session.wait_for(WAIT, |s| s.pull.is_some_and(|p| p.particle == corner)));
+    let grabbed = session.status().pull.unwrap();
+    assert_eq!(grabbed.target, grabbed.at, "held where it is");
+
+    // Move the target 30 cm sideways and up, in steps, as a drag does.
+    let target = grabbed.at + DVec3::new(0.3, 0.0, 0.3);
+    for k in 1..=3 {
+        let to = grabbed.at + (target - grabbed.at) * (k as f64 / 3.0);
+        h.state().session.send(Command::PullTo(to.to_array()));
+        step(&mut h, 4);
+    }
+    // A slider moved during the drag does not let go.
+    set_slider(&mut h, "λ curvature", 0.3);
+    step(&mut h, 8);
+    let pulled = h.state().session.status().pull.unwrap();
+    assert_eq!(pulled.target, target);
+    assert!(
+        pulled.at.distance(target) < 0.5 * grabbed.at.distance(target),
+        "the particle follows: {} → {}, target {target}",
+        grabbed.at,
+        pulled.at
+    );
+
+    h.state().session.send(Command::Release);
+    step(&mut h, 3);
+    assert_eq!(h.state().session.status().pull, None);
+    h.get_by_label("Stop recording").click();
+    h.run();
+    assert!(h.state().session.wait_for(WAIT, |s| s.recording.is_none()));
+    let digest = h.state().session.status().digest;
+
+    let rec = read::read(&file).unwrap();
+    // Grabbed and first moved for frame 6 (one change: both came before
+    // that step), moved for 10 and 14, the slider for 18 (the pull kept),
+    // let go for frame 26.
+    let pulls: Vec<i64> = rec
+        .params
+        .iter()
+        .filter(|(_, t)| t.contains("[pull]"))
+        .map(|(f, _)| *f)
+        .collect();
+    assert_eq!(pulls, vec![6, 10, 14, 18], "{:?}", rec.params);
+    let events = |needle: &str| -> Vec<i64> {
+        rec.events
+            .iter()
+            .filter(|(_, m)| m.contains(needle))
+            .map(|(f, _)| *f)
+            .collect()
+    };
+    assert_eq!(events("pull → {"), vec![6]);
+    assert_eq!(events("pull → none"), vec![26]);
+    // Drawn from the grab to the frame before the release, blanked at it.
+    assert_eq!(
+        rec.frames(paths::PULL),
+        (6..=26).collect::<Vec<i64>>(),
+        "{:?}",
+        rec.entities.keys().collect::<Vec<_>>()
+    );
+
+    let replayed = weft::replay::replay(&file).unwrap();
+    assert!(replayed.reproduced(), "{replayed:?}");
+    assert_eq!(replayed.digest, digest);
+    assert_eq!(replayed.frames, 28);
+}
