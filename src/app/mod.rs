@@ -27,6 +27,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use re_viewer::external::re_log_channel;
+use re_viewer::external::re_view_spatial::SpatialView3D;
+use re_viewer::external::re_viewer_context::ViewClass as _;
 use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
 
 use crate::scene::{Override, load};
@@ -65,6 +67,8 @@ pub struct WeftApp {
     /// With `--screenshot`: how far (simulated seconds) the viewer's time
     /// cursor was at most behind the simulation while playing.
     lag: f64,
+    /// Ctrl-drag on the cloth ([`pull`]).
+    gesture: pull::Gesture,
 }
 
 impl eframe::App for WeftApp {
@@ -77,6 +81,7 @@ impl eframe::App for WeftApp {
             .default_size(340.0)
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
+        self.gesture.update(ui.ctx(), &self.session);
         // No repaint is asked for here: the session asks for one when its
         // status changes, and the viewer when a message arrives, so a
         // paused window with nobody at it does not redraw.
@@ -98,6 +103,7 @@ impl eframe::App for WeftApp {
         if !ctx.text_edit_focused() {
             panel::take_simulation_keys(&mut raw_input.events);
         }
+        self.gesture.take_events(&mut raw_input.events);
         if self.screenshot.is_some() {
             raw_input
                 .events
@@ -287,6 +293,9 @@ pub fn run(
                 re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
             );
             viewer.add_log_receiver(rx);
+            viewer.extend_view_class(SpatialView3D::identifier(), |r| {
+                r.register_context_system::<pull::Probe>()
+            })?;
             let ctx = cc.egui_ctx.clone();
             session.set_waker(move || ctx.request_repaint());
             session.pace_to_viewer();
@@ -296,6 +305,7 @@ pub fn run(
                 session,
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
                 lag: 0.0,
+                gesture: pull::Gesture::default(),
             }))
         }),
     )

@@ -41,7 +41,7 @@ use re_viewer::external::re_viewer_context::{
 };
 
 use crate::scene::Scene;
-use crate::solver::Pull;
+use crate::solver::{Pull, portable};
 use crate::telemetry::paths;
 
 /// How stiff a grab's spring is, per kilogram of cloth: (2π · 2 Hz)², so
@@ -136,7 +136,8 @@ impl Eye {
         );
         match self.fov_y {
             Some(fov) => {
-                let half = (0.5 * fov).tan();
+                let (sin, cos) = portable::sin_cos(0.5 * fov);
+                let half = sin / cos;
                 let d = Vec3::new(ndc.x * half * size.x / size.y, ndc.y * half, -1.0);
                 (self.position, (self.rotation * d).normalize_or_zero())
             }
@@ -177,13 +178,19 @@ pub static PROBED: Mutex<Probed> = Mutex::new(Probed {
     hovered: None,
 });
 
-/// The window's side of a Ctrl-drag.
+/// The window's side of a Ctrl-drag: takes the press from the viewer's
+/// input ([`Gesture::take_events`]), then grabs, moves the target and lets
+/// go through the session ([`Gesture::update`]).
 #[derive(Clone, Debug, Default)]
 pub struct Gesture {
-    /// While dragging: the grabbed point (world coordinates), the plane's
-    /// normal (the camera's forward at the grab) and the 3D view's
-    /// rectangle.
-    pub drag: Option<Drag>,
+    /// A Ctrl-press on the cloth not yet turned into a grab: where.
+    pressed: Option<Vec2>,
+    /// The drag under way.
+    drag: Option<Drag>,
+    /// Whether the button was released during the drag.
+    released: bool,
+    /// The modifier keys held, as last reported.
+    held: egui::Modifiers,
 }
 
 /// A drag under way.
@@ -200,6 +207,107 @@ pub struct Drag {
 }
 
 impl Gesture {
+    /// A drag on the plane through `point` facing `normal`, in the view
+    /// drawn in `rect` (for tests; the window starts one with a press).
+    pub fn dragging(point: Vec3, normal: Vec3, rect: (Vec2, Vec2)) -> Self {
+        Self {
+            drag: Some(Drag {
+                point,
+                normal,
+                rect,
+                target: point,
+            }),
+            ..Self::default()
+        }
+    }
+
+    /// Whether a drag is under way.
+    pub fn is_dragging(&self) -> bool {
+        self.drag.is_some() || self.pressed.is_some()
+    }
+
+    /// Takes the gesture's button events out of the window's input before
+    /// the viewer sees them: a press of the primary button with Ctrl (⌘ on
+    /// a Mac) while the probe has the pointer over the cloth, and that
+    /// button's release while dragging. So the viewer neither selects nor
+    /// turns its camera; the pointer's moves still reach it.
+    pub fn take_events(&mut self, events: &mut Vec<egui::Event>) {
+        let on_cloth = || {
+            PROBED
+                .lock()
+                .expect("not poisoned")
+                .hovered
+                .is_some_and(|(_, cloth)| cloth)
+        };
+        events.retain(|e| match e {
+            egui::Event::ModifiersChanged(m) => {
+                self.held = *m;
+                true
+            }
+            egui::Event::PointerButton {
+                pos,
+                button: egui::PointerButton::Primary,
+                pressed: true,
+                modifiers,
+            } if (modifiers.command || self.held.command)
+                && self.drag.is_none()
+                && self.pressed.is_none()
+                && on_cloth() =>
+            {
+                self.pressed = Some(Vec2::new(pos.x, pos.y));
+                self.released = false;
+                false
+            }
+            egui::Event::PointerButton {
+                button: egui::PointerButton::Primary,
+                pressed: false,
+                ..
+            } if self.drag.is_some() || self.pressed.is_some() => {
+                self.released = true;
+                false
+            }
+            _ => true,
+        });
+    }
+
+    /// Turns the gesture into the session's commands, once a frame after
+    /// the viewer has drawn: a press grabs the particle nearest the point
+    /// under the pointer, a move sends the new target, a release lets go.
+    pub fn update(&mut self, ctx: &egui::Context, session: &super::session::Session) {
+        use super::session::Command;
+        let probed = PROBED.lock().expect("not poisoned").clone();
+        if let Some(at) = self.pressed.take() {
+            let (Some(eye), Some((point, true))) = (probed.eye, probed.hovered) else {
+                self.released = false;
+                return;
+            };
+            let rects = widget_rects(ctx, at);
+            if let Some(rect) = view_rect(&eye, rects, at, point) {
+                re_log::debug!("Ctrl-drag: grabbing the cloth at {point} (view {rect:?})");
+                *self = Self::dragging(point, eye.forward(), rect);
+                session.send(Command::Grab(point.to_array()));
+            }
+        }
+        if std::mem::take(&mut self.released) {
+            if self.drag.take().is_some() {
+                re_log::debug!("Ctrl-drag: letting go");
+                session.send(Command::Release);
+            }
+            return;
+        }
+        let (Some(eye), Some(pointer)) = (probed.eye, ctx.input(|i| i.pointer.latest_pos())) else {
+            return;
+        };
+        let pointer = Vec2::new(pointer.x, pointer.y);
+        if let Some(target) = self.target(&eye, pointer)
+            && let Some(drag) = &mut self.drag
+            && target.distance(drag.target) > 1e-4
+        {
+            drag.target = target;
+            session.send(Command::PullTo(target.as_dvec3().to_array()));
+        }
+    }
+
     /// Where the target is with the pointer at `pointer` and the camera at
     /// `eye`: where the pointer's ray meets the drag's plane.
     pub fn target(&self, eye: &Eye, pointer: Vec2) -> Option<Vec3> {
@@ -207,6 +315,26 @@ impl Gesture {
         let (origin, dir) = eye.ray(d.rect, pointer);
         on_plane(origin, dir, d.point, d.normal)
     }
+}
+
+/// The rectangles of the widgets under `at` in the window's last frame
+/// (the 3D view's among them).
+fn widget_rects(ctx: &egui::Context, at: Vec2) -> Vec<(Vec2, Vec2)> {
+    let at = egui::pos2(at.x, at.y);
+    ctx.viewport(|v| {
+        v.prev_pass
+            .widgets
+            .layers()
+            .flat_map(|(_, widgets)| widgets.iter())
+            .filter(|w| w.rect.contains(at))
+            .map(|w| {
+                (
+                    Vec2::new(w.rect.min.x, w.rect.min.y),
+                    Vec2::new(w.rect.max.x, w.rect.max.y),
+                )
+            })
+            .collect()
+    })
 }
 
 /// Of the rectangles `rects` (screen corners), the one whose ray through
@@ -311,14 +439,7 @@ mod tests {
         let other = (Vec2::new(0.0, 300.0), Vec2::new(400.0, 600.0));
         let found = view_rect(&eye, [other, rect], Vec2::new(200.0, 150.0), point);
         assert_eq!(found, Some(rect));
-        let g = Gesture {
-            drag: Some(Drag {
-                point,
-                normal: eye.forward(),
-                rect,
-                target: point,
-            }),
-        };
+        let g = Gesture::dragging(point, eye.forward(), rect);
         let right = g.target(&eye, Vec2::new(300.0, 150.0)).unwrap();
         assert!(
             right.x > 0.5 && right.y.abs() < 1e-5 && right.z.abs() < 1e-5,
