@@ -150,3 +150,57 @@ fn a_drag_pulls_the_particle_and_replays_bit_for_bit() {
     assert_eq!(replayed.digest, digest);
     assert_eq!(replayed.frames, 28);
 }
+
+/// A branch from a frame in the middle of a drag starts from the state
+/// the run had there, bit for bit: the session re-applies the grab and the
+/// moves to reach it. From there it goes on with the current tuning, which
+/// no longer pulls.
+#[test]
+fn a_branch_in_the_middle_of_a_drag_is_bit_identical() {
+    let loaded = load::load("hanging_sheet", &[]).unwrap();
+    let session = Session::start(loaded, "hanging_sheet".into(), |_| {}).unwrap();
+    let step_to = |frame: u64| {
+        let now = session.status().frame;
+        for _ in now..frame {
+            session.send(Command::Step);
+        }
+        assert!(
+            session.wait_for(WAIT, |s| s.frame == frame),
+            "{frame}: {:?} at {}",
+            session.status().error,
+            session.status().frame
+        );
+        session.status().digest
+    };
+    step_to(40);
+    let preset = session.status().preset.unwrap();
+    let mut scene = weft::scene::Scene::new(&preset).unwrap();
+    for _ in 0..40 {
+        scene.step().unwrap();
+    }
+    let x = scene.world_positions();
+    let low = (0..x.len())
+        .min_by(|&a, &b| x[a].z.total_cmp(&x[b].z))
+        .unwrap();
+    session.send(Command::Grab(x[low].to_array()));
+    let from = x[low].as_dvec3();
+    for k in 1..=3 {
+        session.send(Command::PullTo(
+            (from + DVec3::new(0.1 * k as f64, -0.1, 0.1)).to_array(),
+        ));
+        step_to(40 + 6 * k);
+    }
+    // Grabbed for frame 41, moved for 41, 47 and 53.
+    let at_58 = step_to(58);
+    step_to(70);
+    session.send(Command::Release);
+    let at_100 = step_to(100);
+
+    // From checkpoint 30, through the grab and the moves, to 58.
+    session.send(Command::Branch(weft::app::session::BranchAt::Frame(58)));
+    assert!(session.wait_for(WAIT, |s| s.run.number == 2));
+    let s = session.status();
+    assert_eq!((s.frame, &s.digest), (58, &at_58));
+    assert_eq!(s.pull, None, "the branch goes on with the current tuning");
+    assert_ne!(step_to(100), at_100, "let go at 58, not at 70");
+}
