@@ -24,8 +24,9 @@
 //!   input, so the viewer neither selects nor turns its camera (it rolls
 //!   the camera on Ctrl-drag otherwise); the pointer's moves still reach
 //!   it. While the button is held, the target is where the pointer's ray
-//!   meets the plane through the grabbed point facing the camera: the
-//!   ray from the eye through the pointer, within the 3D view's rectangle
+//!   meets the plane facing the camera at the grabbed point's depth (it
+//!   moves with the camera, which follows a carried cloth): the ray from
+//!   the eye through the pointer, within the 3D view's rectangle
 //!   ([`Eye::ray`]). Releasing the button lets go.
 
 use std::sync::Mutex;
@@ -196,10 +197,10 @@ pub struct Gesture {
 /// A drag under way.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Drag {
-    /// The point grabbed (world coordinates): the plane passes through it.
-    pub point: Vec3,
-    /// The plane's normal: the camera's forward at the grab.
-    pub normal: Vec3,
+    /// How far in front of the camera the grabbed point was: the plane the
+    /// target moves in faces the camera at that depth, and moves with it
+    /// (a camera that follows a carried cloth carries the plane along).
+    pub depth: f32,
     /// The 3D view's rectangle on the screen.
     pub rect: (Vec2, Vec2),
     /// The last target sent.
@@ -207,13 +208,12 @@ pub struct Drag {
 }
 
 impl Gesture {
-    /// A drag on the plane through `point` facing `normal`, in the view
-    /// drawn in `rect` (for tests; the window starts one with a press).
-    pub fn dragging(point: Vec3, normal: Vec3, rect: (Vec2, Vec2)) -> Self {
+    /// A drag of `point`, seen by `eye` in the view drawn in `rect` (for
+    /// tests; the window starts one with a press).
+    pub fn dragging(eye: &Eye, point: Vec3, rect: (Vec2, Vec2)) -> Self {
         Self {
             drag: Some(Drag {
-                point,
-                normal,
+                depth: (point - eye.position).dot(eye.forward()),
                 rect,
                 target: point,
             }),
@@ -284,7 +284,7 @@ impl Gesture {
             let rects = widget_rects(ctx, at);
             if let Some(rect) = view_rect(&eye, rects, at, point) {
                 re_log::debug!("Ctrl-drag: grabbing the cloth at {point} (view {rect:?})");
-                *self = Self::dragging(point, eye.forward(), rect);
+                *self = Self::dragging(&eye, point, rect);
                 session.send(Command::Grab(point.to_array()));
             }
         }
@@ -309,11 +309,13 @@ impl Gesture {
     }
 
     /// Where the target is with the pointer at `pointer` and the camera at
-    /// `eye`: where the pointer's ray meets the drag's plane.
+    /// `eye`: where the pointer's ray meets the plane facing the camera at
+    /// the grabbed point's depth.
     pub fn target(&self, eye: &Eye, pointer: Vec2) -> Option<Vec3> {
         let d = self.drag?;
         let (origin, dir) = eye.ray(d.rect, pointer);
-        on_plane(origin, dir, d.point, d.normal)
+        let forward = eye.forward();
+        on_plane(origin, dir, eye.position + forward * d.depth, forward)
     }
 }
 
@@ -439,7 +441,7 @@ mod tests {
         let other = (Vec2::new(0.0, 300.0), Vec2::new(400.0, 600.0));
         let found = view_rect(&eye, [other, rect], Vec2::new(200.0, 150.0), point);
         assert_eq!(found, Some(rect));
-        let g = Gesture::dragging(point, eye.forward(), rect);
+        let g = Gesture::dragging(&eye, point, rect);
         let right = g.target(&eye, Vec2::new(300.0, 150.0)).unwrap();
         assert!(
             right.x > 0.5 && right.y.abs() < 1e-5 && right.z.abs() < 1e-5,
@@ -447,6 +449,14 @@ mod tests {
         );
         let up = g.target(&eye, Vec2::new(200.0, 100.0)).unwrap();
         assert!(up.z > 0.1 && up.x.abs() < 1e-5, "{up}");
+        // A camera that moves (following a carried cloth) carries the
+        // plane, and the target under the pointer, along.
+        let moved = Eye {
+            position: eye.position + Vec3::new(3.0, 0.0, 0.0),
+            ..eye
+        };
+        let carried = g.target(&moved, Vec2::new(300.0, 150.0)).unwrap();
+        assert!((carried - right - Vec3::new(3.0, 0.0, 0.0)).length() < 1e-5);
     }
 
     #[test]
