@@ -204,3 +204,54 @@ fn a_branch_in_the_middle_of_a_drag_is_bit_identical() {
     assert_eq!(s.pull, None, "the branch goes on with the current tuning");
     assert_ne!(step_to(100), at_100, "let go at 58, not at 70");
 }
+
+/// On the car flag, which the camera follows down the road, the viewer
+/// may show a frame a little behind the simulation: what is grabbed and
+/// where it is pulled to are the points seen there, carried with the car
+/// to the simulation's frame.
+#[test]
+fn a_point_seen_behind_the_simulation_is_carried_with_the_car() {
+    let loaded = load::load("flag_on_car", &[]).unwrap();
+    let preset = loaded.preset.clone();
+    let session = Session::start(loaded, "flag_on_car".into(), |_| {}).unwrap();
+    for _ in 0..120 {
+        session.send(Command::Step);
+    }
+    assert!(session.wait_for(WAIT, |s| s.frame == 120));
+    // The scene at frame 105 (what the viewer shows) and at 120.
+    let mut scene = weft::scene::Scene::new(&preset).unwrap();
+    for _ in 0..105 {
+        scene.step().unwrap();
+    }
+    let seen = scene.world_positions().into_owned();
+    let seen_origin = scene.solver().frame().origin;
+    for _ in 105..120 {
+        scene.step().unwrap();
+    }
+    let moved = scene.solver().frame().origin - seen_origin;
+    assert!(moved.length() > 1.0, "the car drove on: {moved}");
+    let now = scene.world_positions().into_owned();
+    let nearest = |p: DVec3| {
+        (0..now.len())
+            .min_by(|&a, &b| {
+                (now[a].as_dvec3().distance(p)).total_cmp(&now[b].as_dvec3().distance(p))
+            })
+            .unwrap()
+    };
+
+    let id = session.status().run.recording_id;
+    session.viewer_shows(id, weft::app::session::BranchAt::Frame(105));
+    let tip = preset.cloth.weft as usize - 1;
+    session.send(Command::Grab(seen[tip].to_array()));
+    assert!(session.wait_for(WAIT, |s| s.pull.is_some()));
+    // The particle nearest the seen point carried with the car; not the
+    // one nearest it where it was seen, metres behind.
+    let grabbed = nearest(seen[tip].as_dvec3() + moved);
+    assert_eq!(session.status().pull.unwrap().particle, grabbed);
+    let far = now[nearest(seen[tip].as_dvec3())].as_dvec3();
+    assert!(far.distance(seen[tip].as_dvec3()) > 0.5, "{far}");
+    let to = seen[tip].as_dvec3() + DVec3::new(0.0, 0.0, 0.3);
+    session.send(Command::PullTo(to.to_array()));
+    assert!(session.wait_for(WAIT, |s| s.pull.is_some_and(|p| p.target != p.at)));
+    assert_eq!(session.status().pull.unwrap().target, to + moved);
+}

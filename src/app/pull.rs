@@ -11,7 +11,10 @@
 //!   [`Command::PullTo`](super::session::Command::PullTo) moves the target;
 //!   [`Command::Release`](super::session::Command::Release) lets go. Each
 //!   is a change of the tuning from the next step, logged at the frame it
-//!   takes effect, so a recording with a drag replays bit for bit.
+//!   takes effect, so a recording with a drag replays bit for bit. Points
+//!   come from the frame the viewer shows, which may be a little behind
+//!   the simulation's; the session carries them to its frame with the
+//!   solver's origin ([`Trail`]).
 //! - **The probe**, a context system added to the viewer's 3D view class
 //!   ([`Probe`]): each time a 3D view is drawn it notes the view's camera
 //!   (the eye: where it is, how it is turned, its field of view) and the
@@ -104,6 +107,47 @@ impl Pulled {
             at: scene.solver().frame().world(local),
             target: pull.target,
         })
+    }
+}
+
+/// Where the solver's origin was at the last frames of a run, so that a
+/// point seen in the viewer, which may show a frame a little behind the
+/// simulation (at most [`MAX_LEAD`](super::session::MAX_LEAD) while it
+/// follows), is carried to the simulation's frame: on a carried cloth
+/// (the car flag at 14 m/s) a quarter of a second is 3.5 m.
+#[derive(Clone, Debug, Default)]
+pub struct Trail {
+    /// `(frame, time, origin)`, oldest first, at most [`Trail::LEN`].
+    frames: std::collections::VecDeque<(u64, f64, DVec3)>,
+}
+
+impl Trail {
+    /// Frames kept: more than the viewer lags behind while it follows.
+    pub const LEN: usize = 256;
+
+    /// Notes the origin at a frame stepped.
+    pub fn note(&mut self, frame: u64, time: f64, origin: DVec3) {
+        if self.frames.len() == Self::LEN {
+            self.frames.pop_front();
+        }
+        self.frames.push_back((frame, time, origin));
+    }
+
+    /// Forgets every frame (a new run).
+    pub fn clear(&mut self) {
+        self.frames.clear();
+    }
+
+    /// How far the origin moved from the frame `seen` (a frame number, or
+    /// the latest frame at a simulated time) to `now`: what to add to a
+    /// point seen there. Zero for a frame no longer kept.
+    pub fn since(&self, seen: super::session::BranchAt, now: DVec3) -> DVec3 {
+        use super::session::BranchAt;
+        let found = match seen {
+            BranchAt::Frame(f) => self.frames.iter().find(|(k, _, _)| *k == f),
+            BranchAt::Time(t) => self.frames.iter().rev().find(|(_, at, _)| *at <= t + 1e-9),
+        };
+        found.map_or(DVec3::ZERO, |(_, _, origin)| now - *origin)
     }
 }
 
@@ -457,6 +501,30 @@ mod tests {
         };
         let carried = g.target(&moved, Vec2::new(300.0, 150.0)).unwrap();
         assert!((carried - right - Vec3::new(3.0, 0.0, 0.0)).length() < 1e-5);
+    }
+
+    #[test]
+    fn a_point_seen_a_few_frames_back_is_carried_to_now() {
+        use crate::app::session::BranchAt;
+        let mut trail = Trail::default();
+        for f in 0..300u64 {
+            trail.note(f, f as f64 / 60.0, DVec3::new(f as f64 * 0.25, 0.0, 0.0));
+        }
+        let now = DVec3::new(299.0 * 0.25, 0.0, 0.0);
+        assert_eq!(
+            trail.since(BranchAt::Frame(290), now),
+            DVec3::new(2.25, 0.0, 0.0)
+        );
+        let t = 280.5 / 60.0; // between frames: the one shown is 280
+        assert_eq!(
+            trail.since(BranchAt::Time(t), now),
+            DVec3::new(4.75, 0.0, 0.0)
+        );
+        assert_eq!(
+            trail.since(BranchAt::Frame(10), now),
+            DVec3::ZERO,
+            "forgotten"
+        );
     }
 
     #[test]

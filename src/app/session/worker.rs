@@ -36,6 +36,8 @@ pub(super) struct Worker {
     tee: Arc<Tee>,
     forward: Forward,
     inspect: Option<usize>,
+    /// The origin at the run's last frames, for points seen in the viewer.
+    trail: pull::Trail,
     /// The last particle picked near a point, and how many were.
     picked: Option<(u64, usize)>,
     /// The file the current run is recorded to, if any.
@@ -85,6 +87,7 @@ impl Worker {
             tee: opened.tee,
             forward,
             inspect: None,
+            trail: pull::Trail::default(),
             picked: None,
             recording: None,
             status,
@@ -237,18 +240,32 @@ impl Worker {
                 self.diagnose();
             }
             Command::Grab(at) => {
-                let grab = pull::grab(&self.run.scene, glam::Vec3::from_array(at));
+                let at = glam::Vec3::from_array(at).as_dvec3() + self.seen_to_now();
+                let grab = pull::grab(&self.run.scene, at.as_vec3());
                 self.set_pull(grab);
             }
             Command::PullTo(target) => {
                 if let Some(mut p) = self.run.scene.tuning().pull {
-                    p.target = glam::DVec3::from_array(target);
+                    p.target = glam::DVec3::from_array(target) + self.seen_to_now();
                     self.set_pull(Some(p));
                 }
             }
             Command::Release => self.set_pull(None),
         }
         self.publish();
+    }
+
+    /// What to add to a point seen in the viewer to have it at the
+    /// simulation's frame: how far the origin moved since the frame the
+    /// viewer shows of the current run (nothing without a viewer).
+    fn seen_to_now(&self) -> glam::DVec3 {
+        let shown = self.shown.lock().expect("not poisoned");
+        match &shown.at {
+            Some((id, at, _)) if *id == self.info.recording_id => {
+                (self.trail).since(*at, self.run.scene.solver().frame().origin)
+            }
+            _ => glam::DVec3::ZERO,
+        }
     }
 
     /// Pulls a particle (or lets go) from the next step: a change of the
@@ -395,6 +412,7 @@ impl Worker {
                 self.run.telemetry.set_arrows(arrows);
                 self.diagnose();
                 self.history = opened.history;
+                self.trail.clear();
                 self.info = opened.info.clone();
                 self.runs.push(opened.info);
                 if let Err(e) = flushed {
@@ -450,6 +468,8 @@ impl Worker {
                 let run = &self.run;
                 self.history
                     .stepped(frame, run.scene.time(), || run.snapshot());
+                let origin = run.scene.solver().frame().origin;
+                self.trail.note(frame, run.scene.time(), origin);
                 if let Some(d) = run.scene.solver().diagnostics() {
                     let mut values = [0.0; SERIES_VALUES];
                     values[0] = d.max_strain;
