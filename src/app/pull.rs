@@ -23,10 +23,11 @@
 //!   the probe hands them to the window through [`PROBED`].
 //! - **The gesture** ([`Gesture`]), in the window: Ctrl and the primary
 //!   button pressed while the pointer is over the cloth grab the particle
-//!   nearest the point under it. The press is taken from the viewer's
-//!   input, so the viewer neither selects nor turns its camera (it rolls
-//!   the camera on Ctrl-drag otherwise); the pointer's moves still reach
-//!   it. While the button is held, the target is where the pointer's ray
+//!   nearest the point under it; beside the cloth (it moved from under the
+//!   pointer), the particle nearest the pointer's ray ([`grab_along`]).
+//!   A Ctrl-press anywhere in a 3D view is taken from the viewer's input,
+//!   so the viewer neither selects nor turns its camera (it orbits on a
+//!   drag otherwise); the pointer's moves still reach it. While the button is held, the target is where the pointer's ray
 //!   meets the plane facing the camera at the grabbed point's depth (it
 //!   moves with the camera, which follows a carried cloth): the ray from
 //!   the eye through the pointer, within the 3D view's rectangle
@@ -84,6 +85,29 @@ pub fn grab(scene: &Scene, at: Vec3) -> Option<Pull> {
         target: scene.solver().frame().world(local),
         stiffness: stiffness(scene),
     })
+}
+
+/// How far from the pointer's ray a grab off the cloth's surface reaches,
+/// as a share of the cloth's larger side.
+pub const RAY_REACH: f32 = 0.25;
+
+/// A grab of the particle nearest the ray from `origin` along the unit
+/// vector `dir` (world coordinates), in front of it and within
+/// [`RAY_REACH`] of the cloth's larger side: for a press that missed the
+/// surface of a cloth that moves under the pointer.
+pub fn grab_along(scene: &Scene, origin: Vec3, dir: Vec3) -> Option<Pull> {
+    let spec = scene.solver().spec();
+    let reach = RAY_REACH * spec.width.max(spec.height);
+    let x = scene.world_positions();
+    let off = |p: Vec3| {
+        let v = p - origin;
+        (v - dir * v.dot(dir)).length()
+    };
+    let (i, d) = (0..x.len())
+        .filter(|&i| (x[i] - origin).dot(dir) > 0.0)
+        .map(|i| (i, off(x[i])))
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    (d <= reach).then(|| grab(scene, x[i])).flatten()
 }
 
 /// The pull as the panel and the window see it, after the last step.
@@ -214,6 +238,8 @@ pub struct Probed {
     /// The point of the scene under the pointer, and whether it is on the
     /// cloth (its particles or its mesh).
     pub hovered: Option<(Vec3, bool)>,
+    /// Whether the pointer is over a 3D view (on the scene or not).
+    pub over_view: bool,
 }
 
 /// What the probe last saw, for the window (the viewer builds its systems
@@ -221,6 +247,7 @@ pub struct Probed {
 pub static PROBED: Mutex<Probed> = Mutex::new(Probed {
     eye: None,
     hovered: None,
+    over_view: false,
 });
 
 /// The window's side of a Ctrl-drag: takes the press from the viewer's
@@ -234,6 +261,9 @@ pub struct Gesture {
     drag: Option<Drag>,
     /// Whether the button was released during the drag.
     released: bool,
+    /// Whether the button's press was taken from the viewer (its release
+    /// is taken too).
+    taken: bool,
     /// The modifier keys held, as last reported.
     held: egui::Modifiers,
 }
@@ -265,24 +295,14 @@ impl Gesture {
         }
     }
 
-    /// Whether a drag is under way.
-    pub fn is_dragging(&self) -> bool {
-        self.drag.is_some() || self.pressed.is_some()
-    }
-
     /// Takes the gesture's button events out of the window's input before
     /// the viewer sees them: a press of the primary button with Ctrl (⌘ on
-    /// a Mac) while the probe has the pointer over the cloth, and that
-    /// button's release while dragging. So the viewer neither selects nor
-    /// turns its camera; the pointer's moves still reach it.
+    /// a Mac) while the probe has the pointer over a 3D view, and that
+    /// button's release. So the viewer neither selects nor turns its
+    /// camera; the pointer's moves still reach it. (A press off the cloth
+    /// grabs nothing.)
     pub fn take_events(&mut self, events: &mut Vec<egui::Event>) {
-        let on_cloth = || {
-            PROBED
-                .lock()
-                .expect("not poisoned")
-                .hovered
-                .is_some_and(|(_, cloth)| cloth)
-        };
+        let over_view = || PROBED.lock().expect("not poisoned").over_view;
         events.retain(|e| match e {
             egui::Event::ModifiersChanged(m) => {
                 self.held = *m;
@@ -293,12 +313,9 @@ impl Gesture {
                 button: egui::PointerButton::Primary,
                 pressed: true,
                 modifiers,
-            } if (modifiers.command || self.held.command)
-                && self.drag.is_none()
-                && self.pressed.is_none()
-                && on_cloth() =>
-            {
+            } if (modifiers.command || self.held.command) && !self.taken && over_view() => {
                 self.pressed = Some(Vec2::new(pos.x, pos.y));
+                self.taken = true;
                 self.released = false;
                 false
             }
@@ -306,7 +323,8 @@ impl Gesture {
                 button: egui::PointerButton::Primary,
                 pressed: false,
                 ..
-            } if self.drag.is_some() || self.pressed.is_some() => {
+            } if self.taken => {
+                self.taken = false;
                 self.released = true;
                 false
             }
@@ -320,17 +338,43 @@ impl Gesture {
     pub fn update(&mut self, ctx: &egui::Context, session: &super::session::Session) {
         use super::session::Command;
         let probed = PROBED.lock().expect("not poisoned").clone();
-        if let Some(at) = self.pressed.take() {
-            let (Some(eye), Some((point, true))) = (probed.eye, probed.hovered) else {
-                self.released = false;
-                return;
-            };
+        if let Some(at) = self.pressed.take()
+            && let Some(eye) = probed.eye
+        {
             let rects = widget_rects(ctx, at);
-            if let Some(rect) = view_rect(&eye, rects, at, point) {
-                re_log::debug!("Ctrl-drag: grabbing the cloth at {point} (view {rect:?})");
-                *self = Self::dragging(&eye, point, rect);
-                session.send(Command::Grab(point.to_array()));
+            match probed.hovered {
+                // On the cloth: the particle nearest the point under the
+                // pointer.
+                Some((point, true)) => {
+                    if let Some(rect) = view_rect(&eye, rects, at, point) {
+                        re_log::debug!("Ctrl-drag: grabbing the cloth at {point}");
+                        self.drag = Self::dragging(&eye, point, rect).drag;
+                        session.send(Command::Grab(point.to_array()));
+                    }
+                }
+                // Beside it (it moved from under the pointer): the
+                // particle nearest the pointer's ray, in the one view
+                // there; the plane's depth comes with the pull.
+                _ => {
+                    if let [rect] = rects[..] {
+                        let (origin, dir) = eye.ray(rect, at);
+                        re_log::debug!("Ctrl-drag: grabbing the cloth along {dir}");
+                        self.drag = Some(Drag {
+                            depth: f32::NAN,
+                            rect,
+                            target: origin,
+                        });
+                        session.send(Command::GrabAlong(origin.to_array(), dir.to_array()));
+                    }
+                }
             }
+        }
+        if let Some(drag) = &mut self.drag
+            && drag.depth.is_nan()
+            && let (Some(eye), Some(pull)) = (probed.eye, session.status().pull)
+        {
+            drag.depth = (pull.at.as_vec3() - eye.position).dot(eye.forward());
+            drag.target = pull.target.as_vec3();
         }
         if std::mem::take(&mut self.released) {
             if self.drag.take().is_some() {
@@ -343,7 +387,7 @@ impl Gesture {
             return;
         };
         let pointer = Vec2::new(pointer.x, pointer.y);
-        if let Some(target) = self.target(&eye, pointer)
+        if let Some(target) = self.target(&eye, pointer).filter(|t| t.is_finite())
             && let Some(drag) = &mut self.drag
             && target.distance(drag.target) > 1e-4
         {
@@ -364,7 +408,8 @@ impl Gesture {
 }
 
 /// The rectangles of the widgets under `at` in the window's last frame
-/// (the 3D view's among them).
+/// that take clicks and drags, as a 3D view does (the panels and
+/// containers around it take neither).
 fn widget_rects(ctx: &egui::Context, at: Vec2) -> Vec<(Vec2, Vec2)> {
     let at = egui::pos2(at.x, at.y);
     ctx.viewport(|v| {
@@ -372,7 +417,7 @@ fn widget_rects(ctx: &egui::Context, at: Vec2) -> Vec<(Vec2, Vec2)> {
             .widgets
             .layers()
             .flat_map(|(_, widgets)| widgets.iter())
-            .filter(|w| w.rect.contains(at))
+            .filter(|w| w.rect.contains(at) && w.sense.senses_click() && w.sense.senses_drag())
             .map(|w| {
                 (
                     Vec2::new(w.rect.min.x, w.rect.min.y),
@@ -435,6 +480,9 @@ impl ViewContextSystem for Probe {
             fov_y: e.fov_y,
         });
         let hovered = ctx.viewer_ctx.hovered();
+        let over_view = hovered
+            .iter_item_context()
+            .any(|c| matches!(c, ItemContext::ThreeD { .. }));
         let point = hovered.iter_item_context().find_map(|c| match c {
             ItemContext::ThreeD { pos, .. } => *pos,
             _ => None,
@@ -448,6 +496,7 @@ impl ViewContextSystem for Probe {
             probed.eye = eye;
         }
         probed.hovered = point.map(|p| (Vec3::from_array(p.to_array()), cloth));
+        probed.over_view = over_view;
     }
 }
 
@@ -525,6 +574,25 @@ mod tests {
             DVec3::ZERO,
             "forgotten"
         );
+    }
+
+    #[test]
+    fn a_ray_beside_the_cloth_grabs_the_particle_nearest_it() {
+        let preset = crate::scene::load::load("hanging_sheet", &[])
+            .unwrap()
+            .preset;
+        let scene = Scene::new(&preset).unwrap();
+        let x = scene.world_positions();
+        // Looking along +y at a point a centimetre beside particle 7.
+        let beside = x[7] + Vec3::new(0.01, 0.0, 0.0);
+        let from = beside - Vec3::new(0.0, 3.0, 0.0);
+        let pull = grab_along(&scene, from, Vec3::Y).unwrap();
+        assert_eq!(pull.particle, 7);
+        assert_eq!(pull.target.as_vec3(), x[7]);
+        // Looking away, or far off to the side: nothing.
+        assert_eq!(grab_along(&scene, from, Vec3::NEG_Y), None);
+        let far = from + Vec3::new(0.0, 0.0, 10.0);
+        assert_eq!(grab_along(&scene, far, Vec3::Y), None);
     }
 
     #[test]

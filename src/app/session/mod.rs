@@ -73,6 +73,10 @@ pub enum Command {
     /// towards where it is now, until [`Command::Release`]
     /// ([`crate::app::pull`]).
     Grab([f32; 3]),
+    /// Grab the particle nearest the ray from a point along a unit vector
+    /// (world coordinates), if one is near enough ([`crate::app::pull::grab_along`]):
+    /// a press beside the cloth's surface.
+    GrabAlong([f32; 3], [f32; 3]),
     /// Move the grabbed particle's target (world coordinates) from the
     /// next step on.
     PullTo([f64; 3]),

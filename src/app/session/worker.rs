@@ -244,6 +244,14 @@ impl Worker {
                 let grab = pull::grab(&self.run.scene, at.as_vec3());
                 self.set_pull(grab);
             }
+            Command::GrabAlong(origin, dir) => {
+                let origin = glam::Vec3::from_array(origin).as_dvec3() + self.seen_to_now();
+                let dir = glam::Vec3::from_array(dir);
+                let grab = pull::grab_along(&self.run.scene, origin.as_vec3(), dir);
+                if grab.is_some() {
+                    self.set_pull(grab);
+                }
+            }
             Command::PullTo(target) => {
                 if let Some(mut p) = self.run.scene.tuning().pull {
                     p.target = glam::DVec3::from_array(target) + self.seen_to_now();
