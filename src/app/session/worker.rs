@@ -269,9 +269,9 @@ impl Worker {
     fn seen_to_now(&self) -> glam::DVec3 {
         let shown = self.shown.lock().expect("not poisoned");
         match &shown.at {
-            Some((id, at, _)) if *id == self.info.recording_id => {
-                (self.trail).since(*at, self.run.scene.solver().frame().origin)
-            }
+            Some((id, at, _)) if *id == self.info.recording_id => self
+                .trail
+                .since(*at, self.run.scene.solver().frame().origin),
             _ => glam::DVec3::ZERO,
         }
     }
