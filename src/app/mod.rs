@@ -20,6 +20,7 @@
 pub mod history;
 pub mod panel;
 pub mod preset_diff;
+pub mod pull;
 pub mod ruler;
 pub mod session;
 
@@ -29,6 +30,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use re_viewer::external::re_log_channel;
+use re_viewer::external::re_view_spatial::SpatialView3D;
+use re_viewer::external::re_viewer_context::ViewClass as _;
 use re_viewer::{SelectionChangeItem, ViewerEvent, ViewerEventKind};
 
 use crate::scene::{Override, load};
@@ -69,6 +72,8 @@ pub struct WeftApp {
     lag: f64,
     /// A drag begun on the viewer's time ruler, moved to scrub.
     scrub: ruler::Scrub,
+    /// Ctrl-drag on the cloth ([`pull`]).
+    gesture: pull::Gesture,
 }
 
 impl eframe::App for WeftApp {
@@ -82,6 +87,7 @@ impl eframe::App for WeftApp {
             .show(ui, |ui| self.panel.ui(ui, &self.session));
         self.viewer.ui(ui, frame);
         self.session.window_drew();
+        self.gesture.update(ui.ctx(), &self.session);
         // No repaint is asked for here: the session asks for one when its
         // status changes, and the viewer when a message arrives, so a
         // paused window with nobody at it does not redraw.
@@ -108,6 +114,7 @@ impl eframe::App for WeftApp {
         if !ctx.text_edit_focused() {
             panel::take_simulation_keys(&mut raw_input.events);
         }
+        self.gesture.take_events(&mut raw_input.events);
         if self.screenshot.is_some() {
             raw_input
                 .events
@@ -304,6 +311,9 @@ pub fn run(
                 re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
             );
             viewer.add_log_receiver(rx);
+            viewer.extend_view_class(SpatialView3D::identifier(), |r| {
+                r.register_context_system::<pull::Probe>()
+            })?;
             let ctx = cc.egui_ctx.clone();
             session.set_waker(move || ctx.request_repaint());
             session.pace_to_viewer();
@@ -314,6 +324,7 @@ pub fn run(
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
                 lag: 0.0,
                 scrub: ruler::Scrub::default(),
+                gesture: pull::Gesture::default(),
             }))
         }),
     );

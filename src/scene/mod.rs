@@ -218,16 +218,24 @@ impl Scene {
         })
     }
 
-    /// The live-tunable settings: solver parameters and wind.
+    /// The live-tunable settings: solver parameters, wind, and the pull on
+    /// a particle if there is one.
     pub fn tuning(&self) -> Tuning {
-        Tuning::of(&self.preset)
+        Tuning {
+            pull: self.solver.pull(),
+            ..Tuning::of(&self.preset)
+        }
     }
 
     /// Applies live-tunable settings from the next step on, if they validate
-    /// (else nothing changes).
+    /// (else nothing changes). A pull's particle must be one of the cloth's.
     pub fn set_tuning(&mut self, tuning: &Tuning) -> Result<(), ParamError> {
         tuning.validate()?;
+        if let Some(pull) = &tuning.pull {
+            pull.validate(self.solver.state().len())?;
+        }
         self.solver.set_params(tuning.solver)?;
+        self.solver.set_pull(tuning.pull)?;
         tuning.apply_to(&mut self.preset);
         Ok(())
     }

@@ -1,10 +1,21 @@
 //! The tuning: the part of a scene that may change while it runs.
 //!
-//! A [`Tuning`] is the solver parameters and the wind. The panel edits one,
-//! the session applies it from the next step ([`Scene::set_tuning`]), a
-//! recording logs it whenever it changes, and `weft replay` applies the
-//! logged ones at their frames. Everything else in a preset (the cloth,
-//! bodies, colliders) needs a new scene.
+//! A [`Tuning`] is the solver parameters and the wind, and the debugger's
+//! pull on a particle while there is one. The panel edits one, the session
+//! applies it from the next step ([`Scene::set_tuning`]), a recording logs
+//! it whenever it changes, and `weft replay` applies the logged ones at
+//! their frames. Everything else in a preset (the cloth, bodies, colliders)
+//! needs a new scene.
+//!
+//! The pull ([`Pull`]: a hand on the cloth, the debugger's Ctrl-drag) is
+//! no preset key: a preset never has one, [`Tuning::of`] gives none and
+//! [`Tuning::apply_to`] leaves it out. It is part of the tuning so that
+//! grabbing, moving and letting go are changes at their frames like any
+//! other, recorded, replayed and re-applied when branching. It is written
+//! only while there is one, so a recording without a pull stores exactly
+//! what it did before pulls existed. Its particle is checked against the
+//! cloth by the scene ([`Scene::set_tuning`]), which knows how many there
+//! are.
 //!
 //! ```
 //! use weft::scene::{Tuning, load};
@@ -25,7 +36,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::preset::{Preset, WindSection};
-use crate::solver::{Params, Range, RangeError};
+use crate::solver::{Params, Pull, Range, RangeError};
 
 /// What can change while a scene runs, and is recorded whenever it does.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -35,10 +46,14 @@ pub struct Tuning {
     pub solver: Params,
     /// The wind.
     pub wind: WindSection,
+    /// A particle pulled towards a point (the debugger's Ctrl-drag), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pull: Option<Pull>,
 }
 
 /// Where each of the tuning's fields lives in a preset: the preset keys
-/// under these apply live. A test checks that every field has its row.
+/// under these apply live. A test checks that every field but the pull
+/// (which no preset has) has its row.
 const IN_PRESET: [(&str, &str); 2] = [("solver", "solver"), ("wind", "environment.wind")];
 
 /// Mean wind speed, per component.
@@ -51,29 +66,37 @@ const WIND_GUST_PERIOD: Range = Range::new(0.0, 1e4).unit(" s");
 const WIND_SWAY: Range = Range::new(0.0, 180.0).unit("°");
 
 impl Tuning {
-    /// The tuning a preset describes.
+    /// The tuning a preset describes (no pull).
     pub fn of(preset: &Preset) -> Self {
         Self {
             solver: preset.solver,
             wind: preset.environment.wind,
+            pull: None,
         }
     }
 
-    /// Writes this tuning into `preset`.
+    /// Writes this tuning into `preset` (all but the pull, which is no
+    /// preset key).
     pub fn apply_to(&self, preset: &mut Preset) {
         preset.solver = self.solver;
         preset.environment.wind = self.wind;
     }
 
-    /// Checks the solver parameters and the wind; the first problem, under
-    /// its preset key (`solver.dt`, `environment.wind.gust`).
+    /// Checks the solver parameters, the wind and the pull's target and
+    /// stiffness; the first problem, under its key (`solver.dt`,
+    /// `environment.wind.gust`, `pull.stiffness`). The pull's particle is
+    /// checked by the scene, against its cloth.
     pub fn validate(&self) -> Result<(), RangeError> {
         self.solver.validate().map_err(|e| e.under("solver."))?;
         let w = &self.wind;
         WIND_VELOCITY.check_each("environment.wind.velocity", &w.velocity.to_array())?;
         WIND_GUST.check("environment.wind.gust", w.gust)?;
         WIND_GUST_PERIOD.check("environment.wind.gust_period", w.gust_period)?;
-        WIND_SWAY.check("environment.wind.sway", w.sway)
+        WIND_SWAY.check("environment.wind.sway", w.sway)?;
+        match &self.pull {
+            Some(p) => p.validate(p.particle + 1),
+            None => Ok(()),
+        }
     }
 
     /// The preset sections that are the tuning (`solver`, `environment.wind`).

@@ -53,6 +53,7 @@ pub(crate) mod kernels;
 mod measure;
 pub mod params;
 pub mod portable;
+pub mod pull;
 pub mod self_collision;
 mod step;
 mod team;
@@ -66,6 +67,7 @@ pub use families::{Family, PerFamily};
 pub use forced_rotation::ForcedRotation;
 pub use frame::Frame;
 pub use params::{ParamError, Params, Range, RangeError, Weights, Width, compliance_factor};
+pub use pull::Pull;
 pub use topology::Topology;
 pub use update::Environment;
 
@@ -187,6 +189,8 @@ pub struct Solver {
     frame: Frame,
     /// The origin a step before `frame` (to tell a jerk).
     origin_before: DVec3,
+    /// A particle pulled towards a point ([`pull`]), if any.
+    pull: Option<Pull>,
     time: f64,
     steps: u64,
     diagnostics: Option<Box<Diagnostics>>,
@@ -229,6 +233,7 @@ impl Solver {
             state,
             frame: Frame::default(),
             origin_before: DVec3::ZERO,
+            pull: None,
             time: 0.0,
             steps: 0,
             diagnostics: None,
@@ -342,6 +347,21 @@ impl Solver {
         params.validate()?;
         self.params = params;
         Ok(())
+    }
+
+    /// Pulls a particle towards a point from the next step on, or lets go
+    /// (`None`), after checking it against the cloth ([`pull`]).
+    pub fn set_pull(&mut self, pull: Option<Pull>) -> Result<(), ParamError> {
+        if let Some(p) = &pull {
+            p.validate(self.state.len())?;
+        }
+        self.pull = pull;
+        Ok(())
+    }
+
+    /// The pull in force, if any.
+    pub fn pull(&self) -> Option<Pull> {
+        self.pull
     }
 
     /// The parameters in force.

@@ -176,6 +176,16 @@ impl Solver {
             threads,
         );
         self.drive_attachments();
+        if let Some(pull) = &self.pull {
+            let origin = frame.origin_after(sub + 1);
+            pull.apply(
+                &mut self.state.position,
+                &self.mass,
+                &self.inv_mass,
+                origin,
+                dt,
+            );
+        }
         self.check_finite("update")?;
         self.charge(t, |d| &mut d.timings.update);
 

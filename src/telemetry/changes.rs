@@ -1,5 +1,6 @@
 //! Parameter changes in words, for the events a run logs and for `weft
-//! compare`.
+//! compare`: each key that changed, with its old and new value; a pull
+//! that starts or ends reads `pull → {…}` or `pull → none`.
 
 use crate::scene::Tuning;
 
@@ -35,5 +36,41 @@ fn diff(prefix: &str, a: &toml::Table, b: &toml::Table, out: &mut Vec<String>) {
             (Some(va), vb) => out.push(format!("{key} {} → {}", short(va), short(vb))),
             (None, vb) => out.push(format!("{key} → {}", short(vb))),
         }
+    }
+    // A key only the old one has (the pull, let go of).
+    for k in a.keys().filter(|k| !b.contains_key(*k)) {
+        out.push(format!("{prefix}{k} → none"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::Pull;
+
+    #[test]
+    fn a_pull_is_described_when_it_starts_moves_and_ends() {
+        let preset = crate::scene::load::load("hanging_sheet", &[])
+            .unwrap()
+            .preset;
+        let free = Tuning::of(&preset);
+        let held = Tuning {
+            pull: Some(Pull {
+                particle: 7,
+                target: glam::DVec3::new(0.5, 0.0, 1.0),
+                stiffness: 20.0,
+            }),
+            ..free
+        };
+        let start = describe_changes(&free, &held);
+        assert!(start.starts_with("pull → "), "{start}");
+        assert!(start.contains("particle = 7"), "{start}");
+        let mut moved = held;
+        moved.pull.as_mut().unwrap().target.z = 1.5;
+        assert_eq!(
+            describe_changes(&held, &moved),
+            "pull.target [0.5, 0.0, 1.0] → [0.5, 0.0, 1.5]"
+        );
+        assert_eq!(describe_changes(&moved, &free), "pull → none");
     }
 }

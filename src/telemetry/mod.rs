@@ -16,6 +16,7 @@
 //! | `world/ghost/mesh` | another run's cloth, faint (`ghost.rs`: a branch's parent, in the debugger) | triangles static; positions and normals at the frames logged |
 //! | `world/corrections/{family}/dx` | δx of the last adjust (arrows, each at most the cloth's longer side long) | full |
 //! | `world/corrections/{family}/dtheta` | δθ as axis × angle (arrows, as δx's), families that turn | full |
+//! | `world/pull` | the debugger's pull: a line from the pulled particle to its target, while there is one (`pull.rs`) | summary |
 //! | `world/bodies/{name}` | body transform; its colliders below it | summary, when it moved |
 //! | `world/colliders/{k}` | fixed colliders; a plane's patch under the cloth (`colliders.rs`) | static; a plane's corners at summary |
 //! | `metrics/violation/{family}/{max,rms}` | per-family violation | summary |
@@ -42,6 +43,7 @@ pub mod framing;
 mod full;
 pub mod ghost;
 pub mod paths;
+mod pull;
 pub mod read;
 
 pub use batching::{file_batching, whole_frames};
@@ -109,6 +111,8 @@ pub struct Telemetry {
     visuals: bool,
     /// Whether each frame's drawing is flushed as soon as it is logged.
     whole_drawings: bool,
+    /// Whether the last logged frame drew a pull.
+    pull_drawn: bool,
 }
 
 impl Telemetry {
@@ -127,6 +131,7 @@ impl Telemetry {
             crossings_drawn: false,
             visuals: true,
             whole_drawings: false,
+            pull_drawn: false,
         }
     }
 
@@ -514,6 +519,7 @@ impl Telemetry {
         }
         colliders::log_planes(rec, scene, x)?;
         self.log_crossings(scene, radius)?;
+        pull::log(&self.rec, scene, x, radius, &mut self.pull_drawn)?;
 
         if self.settings.level == Level::Full {
             self.log_full(scene, radius)?;

@@ -24,6 +24,8 @@ pub const CROSSINGS: &str = "world/cloth/crossings";
 pub const GHOST: &str = "world/ghost/mesh";
 /// Element normals.
 pub const NORMALS: &str = "world/cloth/normals";
+/// The debugger's pull: a line from the pulled particle to its target.
+pub const PULL: &str = "world/pull";
 /// Static topology (index arrays).
 pub const TOPOLOGY: &str = "cloth/topology";
 /// Solver parameters, logged at every change.

@@ -100,11 +100,12 @@ impl Recording {
 
 /// The main array of an entity's rows: the first component whose name ends
 /// in one of these, else its first component.
-const MAIN: [&str; 5] = [
+const MAIN: [&str; 6] = [
     ":positions",
     ":vectors",
     ":scalars",
     ":vertex_positions",
+    ":strips",
     ":text",
 ];
 

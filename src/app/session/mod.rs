@@ -72,6 +72,20 @@ pub enum Command {
     /// Whether a branch's 3D view draws its parent's cloth, faint, beside
     /// its own (on at start; kept for later runs).
     Ghost(bool),
+    /// Grab the particle nearest this point (world coordinates, at the
+    /// current frame): from the next step it is pulled with a spring
+    /// towards where it is now, until [`Command::Release`]
+    /// ([`crate::app::pull`]).
+    Grab([f32; 3]),
+    /// Grab the particle nearest the ray from a point along a unit vector
+    /// (world coordinates), if one is near enough ([`crate::app::pull::grab_along`]):
+    /// a press beside the cloth's surface.
+    GrabAlong([f32; 3], [f32; 3]),
+    /// Move the grabbed particle's target (world coordinates) from the
+    /// next step on.
+    PullTo([f64; 3]),
+    /// Let go of the grabbed particle from the next step on.
+    Release,
 }
 
 /// What the viewer last showed, for pacing the simulation to it.
@@ -174,6 +188,8 @@ pub struct Status {
     pub checkpoints: (usize, u64),
     /// The inspected particle.
     pub particle: Option<ParticleReadout>,
+    /// The grabbed particle, where it is and where it is pulled to.
+    pub pull: Option<crate::app::pull::Pulled>,
     /// The last [`Command::InspectNear`]'s particle, with how many have
     /// been handled (so the panel sees each once).
     pub picked: Option<(u64, usize)>,

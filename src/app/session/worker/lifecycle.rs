@@ -102,6 +102,7 @@ impl Worker {
                 self.run.telemetry.set_arrows(arrows);
                 self.diagnose();
                 self.history = opened.history;
+                self.trail.clear();
                 self.info = opened.info.clone();
                 self.runs.push(opened.info);
                 self.keep_frame();

@@ -15,6 +15,7 @@ use rerun::sink::FileSink;
 
 use super::SessionError;
 use crate::app::history::History;
+use crate::app::pull;
 use crate::record::Run;
 use crate::scene::{Loaded, load};
 use crate::solver::Family;
@@ -45,6 +46,8 @@ pub(super) struct Worker {
     tee: Arc<Tee>,
     forward: Forward,
     inspect: Option<usize>,
+    /// The origin at the run's last frames, for points seen in the viewer.
+    trail: pull::Trail,
     /// The last particle picked near a point, and how many were.
     picked: Option<(u64, usize)>,
     /// The file the current run is recorded to, if any.
@@ -101,6 +104,7 @@ impl Worker {
             tee: opened.tee,
             forward,
             inspect: None,
+            trail: pull::Trail::default(),
             picked: None,
             recording: None,
             status,
@@ -203,7 +207,9 @@ impl Worker {
                 self.begin(Start::Fresh(Box::new(loaded)), None);
             }
             Command::Speed(s) => self.speed = s.clamp(0.01, 100.0),
-            Command::Tune(t) => {
+            Command::Tune(mut t) => {
+                // The panel's tuning has no pull: a grab goes on.
+                t.pull = self.run.scene.tuning().pull;
                 if let Err(e) = self.run.set_tuning(&t) {
                     self.set_error(Some(e.to_string()));
                 }
@@ -248,19 +254,7 @@ impl Worker {
             }
             Command::Branch(at) => self.branch(at),
             Command::InspectNear(at) => {
-                let at = glam::Vec3::from_array(at);
-                let nearest = self
-                    .run
-                    .scene
-                    .world_positions()
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| {
-                        a.1.distance_squared(at)
-                            .total_cmp(&b.1.distance_squared(at))
-                    })
-                    .map(|(i, _)| i);
-                if let Some(i) = nearest {
+                if let Some(i) = pull::nearest(&self.run.scene, glam::Vec3::from_array(at)) {
                     let picks = self.picked.map_or(0, |(n, _)| n) + 1;
                     self.picked = Some((picks, i));
                     self.inspect = Some(i);
@@ -276,8 +270,53 @@ impl Worker {
                 self.show_ghost = on;
                 self.draw_ghost(true);
             }
+            Command::Grab(at) => {
+                let at = glam::Vec3::from_array(at).as_dvec3() + self.seen_to_now();
+                let grab = pull::grab(&self.run.scene, at.as_vec3());
+                self.set_pull(grab);
+            }
+            Command::GrabAlong(origin, dir) => {
+                let origin = glam::Vec3::from_array(origin).as_dvec3() + self.seen_to_now();
+                let dir = glam::Vec3::from_array(dir);
+                let grab = pull::grab_along(&self.run.scene, origin.as_vec3(), dir);
+                if grab.is_some() {
+                    self.set_pull(grab);
+                }
+            }
+            Command::PullTo(target) => {
+                if let Some(mut p) = self.run.scene.tuning().pull {
+                    p.target = glam::DVec3::from_array(target) + self.seen_to_now();
+                    self.set_pull(Some(p));
+                }
+            }
+            Command::Release => self.set_pull(None),
         }
         self.publish();
+    }
+
+    /// What to add to a point seen in the viewer to have it at the
+    /// simulation's frame: how far the origin moved since the frame the
+    /// viewer shows of the current run (nothing without a viewer).
+    fn seen_to_now(&self) -> glam::DVec3 {
+        let shown = self.shown.lock().expect("not poisoned");
+        match &shown.at {
+            Some((id, at, _)) if *id == self.info.recording_id => self
+                .trail
+                .since(*at, self.run.scene.solver().frame().origin),
+            _ => glam::DVec3::ZERO,
+        }
+    }
+
+    /// Pulls a particle (or lets go) from the next step: a change of the
+    /// tuning, logged at the frame it takes effect.
+    fn set_pull(&mut self, pull: Option<crate::solver::Pull>) {
+        let tuning = crate::scene::Tuning {
+            pull,
+            ..self.run.scene.tuning()
+        };
+        if let Err(e) = self.run.set_tuning(&tuning) {
+            self.set_error(Some(e.to_string()));
+        }
     }
 
     /// Whether the viewer, following the current run, shows a frame more
@@ -352,6 +391,8 @@ impl Worker {
                 let run = &self.run;
                 self.history
                     .stepped(frame, run.scene.time(), || run.snapshot());
+                let origin = run.scene.solver().frame().origin;
+                self.trail.note(frame, run.scene.time(), origin);
                 if let Some(d) = run.scene.solver().diagnostics() {
                     let mut values = [0.0; SERIES_VALUES];
                     values[0] = d.max_strain;

@@ -8,6 +8,7 @@ use crate::scene::Scene;
 use crate::solver::{Family, PerFamily};
 
 use super::Worker;
+use crate::app::pull::Pulled;
 use crate::app::session::{ParticleReadout, Status};
 
 impl Worker {
@@ -71,6 +72,7 @@ impl Worker {
             checks,
             checkpoints: self.history.checkpoints(),
             particle: self.inspect.map(|i| readout(scene, i)),
+            pull: Pulled::of(scene),
         }
     }
 }
@@ -87,6 +89,7 @@ struct Progress {
     checks: Vec<Check>,
     checkpoints: (usize, u64),
     particle: Option<ParticleReadout>,
+    pull: Option<Pulled>,
 }
 
 impl Progress {
@@ -105,6 +108,7 @@ impl Progress {
         s.checks = self.checks;
         s.checkpoints = self.checkpoints;
         s.particle = self.particle;
+        s.pull = self.pull;
     }
 }
 

@@ -1,0 +1,170 @@
+//! A pull on one particle (the debugger's Ctrl-drag, `solver::pull`):
+//! it draws the particle towards its target, on a cloth at rest and on one
+//! carried by a car (the target in world coordinates, the solver in its
+//! floating origin's); a pull to where the particle already is changes
+//! nothing; and without a pull a run is what it was before pulls existed,
+//! bit for bit.
+
+use glam::{DVec3, Vec3};
+use proptest::prelude::*;
+use weft::scene::{Scene, Tuning, load};
+use weft::solver::{ClothSpec, Environment, Params, Pull, Solver};
+
+/// No gravity, no air: nothing acts from outside.
+fn calm() -> Environment {
+    Environment {
+        gravity: Vec3::ZERO,
+        air_density: 0.0,
+        ..Environment::default()
+    }
+}
+
+/// An `n × n` cloth, exactly flat at rest.
+fn sheet(n: u32) -> Solver {
+    let spec = ClothSpec {
+        weft: n,
+        warp: n,
+        imperfection: 0.0,
+        ..ClothSpec::default()
+    };
+    Solver::new(spec, Params::default(), &[]).unwrap()
+}
+
+fn steps(s: &mut Solver, n: usize) {
+    for _ in 0..n {
+        s.step(&calm(), &[]).unwrap();
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Whichever particle, wherever the target (within a metre), however
+    /// stiff the spring: the particle ends nearer its target, and the
+    /// cloth stays finite.
+    #[test]
+    fn a_pull_draws_its_particle_towards_the_target(
+        particle in 0usize..64,
+        offset in prop::array::uniform3(-1.0f64..1.0),
+        stiffness in 0.5f32..1e4,
+    ) {
+        let offset = DVec3::from_array(offset);
+        prop_assume!(offset.length() > 0.05);
+        let mut s = sheet(8);
+        let start = s.state().position[particle].as_dvec3();
+        let target = start + offset;
+        s.set_pull(Some(Pull { particle, target, stiffness })).unwrap();
+        steps(&mut s, 10);
+        let now = s.state().position[particle].as_dvec3();
+        prop_assert!(s.state().position.iter().all(|x| x.is_finite()));
+        prop_assert!(
+            now.distance(target) < start.distance(target),
+            "{start} → {now}, target {target}"
+        );
+    }
+
+    /// A pull to exactly where the particle is, on a cloth at rest in calm
+    /// air: nothing moves, bit for bit, as without it.
+    #[test]
+    fn a_pull_to_where_the_particle_is_changes_nothing(
+        particle in 0usize..36,
+        stiffness in 0.5f32..1e6,
+    ) {
+        let mut free = sheet(6);
+        let mut held = sheet(6);
+        let target = held.state().position[particle].as_dvec3();
+        held.set_pull(Some(Pull { particle, target, stiffness })).unwrap();
+        steps(&mut free, 5);
+        steps(&mut held, 5);
+        prop_assert_eq!(free.state().digest(), held.state().digest());
+    }
+}
+
+#[test]
+fn a_bad_pull_is_refused_and_changes_nothing() {
+    let mut s = sheet(4);
+    let pull = Pull {
+        particle: 16,
+        target: DVec3::ZERO,
+        stiffness: 1.0,
+    };
+    assert_eq!(s.set_pull(Some(pull)).unwrap_err().key, "pull.particle");
+    assert_eq!(s.pull(), None);
+    let preset = load::load("hanging_sheet", &[]).unwrap().preset;
+    let mut scene = Scene::new(&preset).unwrap();
+    let n = scene.solver().state().len();
+    let bad = Tuning {
+        pull: Some(Pull {
+            particle: n,
+            target: DVec3::ZERO,
+            stiffness: 1.0,
+        }),
+        ..scene.tuning()
+    };
+    let mut also = bad;
+    also.solver.iterations += 1;
+    assert_eq!(scene.set_tuning(&also).unwrap_err().key, "pull.particle");
+    assert_eq!(scene.tuning(), Tuning::of(&preset), "nothing applied");
+}
+
+/// The car flag's free tip, pulled towards a point fixed in the world
+/// beside the road while the car drives on: the solver's origin moves with
+/// the car, the target stays put, and the tip is drawn there (compared
+/// with the same run without the pull).
+#[test]
+fn a_carried_cloth_is_pulled_towards_a_point_fixed_in_the_world() {
+    let preset = load::load("flag_on_car", &[]).unwrap().preset;
+    let mut free = Scene::new(&preset).unwrap();
+    for _ in 0..60 {
+        free.step().unwrap();
+    }
+    let mut held = free.clone();
+    let tip = preset.cloth.weft as usize - 1;
+    let at = held.world_positions()[tip].as_dvec3();
+    let target = at + DVec3::new(0.0, 0.0, 0.6);
+    let tuning = Tuning {
+        pull: Some(Pull {
+            particle: tip,
+            target,
+            stiffness: 50.0,
+        }),
+        ..held.tuning()
+    };
+    held.set_tuning(&tuning).unwrap();
+    for _ in 0..30 {
+        free.step().unwrap();
+        held.step().unwrap();
+    }
+    assert_eq!(
+        held.solver().frame().origin,
+        free.solver().frame().origin,
+        "the origin moves with the car, pull or not"
+    );
+    let pulled = held.world_positions()[tip].as_dvec3();
+    let left = free.world_positions()[tip].as_dvec3();
+    // The car drives off (some 3 m in half a second) and the tip with it,
+    // but nearer the target, and higher, than left alone.
+    assert!(
+        pulled.distance(target) + 0.05 < left.distance(target) && pulled.z > left.z + 0.1,
+        "pulled {pulled}, left alone {left}, target {target}"
+    );
+}
+
+/// Without a pull, runs are what they were before pulls existed: these
+/// digests are those of the same runs (120 frames) made by the weft that
+/// had none.
+#[test]
+fn without_a_pull_nothing_changes() {
+    for (preset, digest) in [
+        ("flag_on_car", "3eabafb62f587e10"),
+        ("hanging_sheet", "18e3caa428002428"),
+    ] {
+        let preset_data = load::load(preset, &[]).unwrap().preset;
+        let mut scene = Scene::new(&preset_data).unwrap();
+        for _ in 0..120 {
+            scene.step().unwrap();
+        }
+        let got = format!("{:016x}", scene.solver().state().digest());
+        assert_eq!(got, digest, "{preset}");
+    }
+}
