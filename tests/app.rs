@@ -5,7 +5,6 @@
 
 use std::time::Duration;
 
-use egui::accesskit::{Action, ActionData, ActionRequest};
 use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
 use weft::app::{
     panel::Panel,
@@ -15,45 +14,11 @@ use weft::scene::load;
 use weft::solver::Family;
 use weft::telemetry::{paths, read};
 
-struct State {
-    panel: Panel,
-    session: Session,
-}
-
-const WAIT: Duration = Duration::from_secs(20);
+mod common;
+use common::panel::{State, WAIT, harness, set_slider, state_with};
 
 fn state(preset: &str) -> State {
     state_with(preset, &[])
-}
-
-/// A session of `preset` with `--set` overrides such as `expect.max_strain=0.1`.
-fn state_with(preset: &str, sets: &[&str]) -> State {
-    let sets: Vec<_> = sets.iter().map(|s| s.parse().unwrap()).collect();
-    let loaded = load::load(preset, &sets).unwrap();
-    let session = Session::start(loaded, preset.into(), |_| {}).unwrap();
-    let panel = Panel::new(&session.status());
-    State { panel, session }
-}
-
-fn harness(state: State) -> Harness<'static, State> {
-    Harness::builder()
-        .with_size([360.0, 1400.0])
-        .build_ui_state(|ui, s: &mut State| s.panel.ui(ui, &s.session), state)
-}
-
-/// Types a value into a slider, as a user (or screen reader) can.
-fn set_slider(h: &mut Harness<'_, State>, label: &str, value: f64) {
-    let (target_node, target_tree) = h
-        .get_by_role_and_label(egui::accesskit::Role::Slider, label)
-        .accesskit_node()
-        .locate();
-    h.event(egui::Event::AccessKitActionRequest(ActionRequest {
-        target_node,
-        target_tree,
-        action: Action::SetValue,
-        data: Some(ActionData::NumericValue(value)),
-    }));
-    h.run();
 }
 
 fn click(h: &mut Harness<'_, State>, label: &str) {

@@ -5,35 +5,17 @@
 //! and a recording of the session replays bit for bit, the drag included.
 #![cfg(feature = "viewer")]
 
-use std::time::Duration;
-
-use egui::accesskit::{Action, ActionData, ActionRequest};
-use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
+use egui_kittest::{Harness, kittest::Queryable};
 use glam::DVec3;
-use weft::app::{
-    panel::Panel,
-    session::{Command, Session},
-};
+use weft::app::session::{Command, Session};
 use weft::scene::load;
 use weft::telemetry::{paths, read};
 
-struct State {
-    panel: Panel,
-    session: Session,
-}
-
-const WAIT: Duration = Duration::from_secs(20);
+mod common;
+use common::panel::{State, WAIT, set_slider, state_with};
 
 fn harness(preset: &str) -> Harness<'static, State> {
-    let loaded = load::load(preset, &[]).unwrap();
-    let session = Session::start(loaded, preset.into(), |_| {}).unwrap();
-    let panel = Panel::new(&session.status());
-    Harness::builder()
-        .with_size([360.0, 1400.0])
-        .build_ui_state(
-            |ui, s: &mut State| s.panel.ui(ui, &s.session),
-            State { panel, session },
-        )
+    common::panel::harness(state_with(preset, &[]))
 }
 
 /// Steps `n` frames through the panel's Step button.
@@ -44,20 +26,6 @@ fn step(h: &mut Harness<'_, State>, n: u64) {
         h.run();
         assert!(h.state().session.wait_for(WAIT, |s| s.frame == next));
     }
-}
-
-fn set_slider(h: &mut Harness<'_, State>, label: &str, value: f64) {
-    let (target_node, target_tree) = h
-        .get_by_role_and_label(egui::accesskit::Role::Slider, label)
-        .accesskit_node()
-        .locate();
-    h.event(egui::Event::AccessKitActionRequest(ActionRequest {
-        target_node,
-        target_tree,
-        action: Action::SetValue,
-        data: Some(ActionData::NumericValue(value)),
-    }));
-    h.run();
 }
 
 #[test]

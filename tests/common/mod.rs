@@ -3,6 +3,9 @@
 // Each test file uses the helpers it needs.
 #![allow(dead_code)]
 
+#[cfg(feature = "viewer")]
+pub mod panel;
+
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 

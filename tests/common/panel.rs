@@ -1,0 +1,50 @@
+//! The tuning panel beside a real session, driven with `egui_kittest` as a
+//! user (or a screen reader) drives it.
+
+use std::time::Duration;
+
+use egui::accesskit::{Action, ActionData, ActionRequest};
+use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
+use weft::app::{panel::Panel, session::Session};
+use weft::scene::load;
+
+/// What the harness holds: the panel and its session.
+pub struct State {
+    pub panel: Panel,
+    pub session: Session,
+}
+
+/// How long a test waits for the session to get somewhere.
+pub const WAIT: Duration = Duration::from_secs(20);
+
+/// A session of `preset` with `--set` overrides such as
+/// `expect.max_strain=0.1`, and its panel.
+pub fn state_with(preset: &str, sets: &[&str]) -> State {
+    let sets: Vec<_> = sets.iter().map(|s| s.parse().unwrap()).collect();
+    let loaded = load::load(preset, &sets).unwrap();
+    let session = Session::start(loaded, preset.into(), |_| {}).unwrap();
+    let panel = Panel::new(&session.status());
+    State { panel, session }
+}
+
+/// The panel of `state` in a harness the size of the panel's snapshot.
+pub fn harness(state: State) -> Harness<'static, State> {
+    Harness::builder()
+        .with_size([360.0, 1400.0])
+        .build_ui_state(|ui, s: &mut State| s.panel.ui(ui, &s.session), state)
+}
+
+/// Types a value into a slider, as a user (or screen reader) can.
+pub fn set_slider(h: &mut Harness<'_, State>, label: &str, value: f64) {
+    let (target_node, target_tree) = h
+        .get_by_role_and_label(egui::accesskit::Role::Slider, label)
+        .accesskit_node()
+        .locate();
+    h.event(egui::Event::AccessKitActionRequest(ActionRequest {
+        target_node,
+        target_tree,
+        action: Action::SetValue,
+        data: Some(ActionData::NumericValue(value)),
+    }));
+    h.run();
+}
