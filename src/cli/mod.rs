@@ -9,11 +9,12 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand};
 
-use crate::record::{Run, table, verdict};
+use crate::record::{Run, RunError, table, verdict};
 use crate::scene::{Override, Scene, load, shipped};
 use crate::telemetry::{self, DEFAULT_VIEWER, Telemetry, blueprint};
 
 mod compare;
+mod failure;
 pub mod output;
 mod sweep;
 
@@ -302,11 +303,35 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
     let outcome = run.run(frames, &stop, |_| bar.inc(1));
     bar.finish_and_clear();
 
-    let failed = outcome.is_err();
-    if let Err(e) = &outcome {
-        eprintln!("error: {e}");
-    }
-    let figures = run.finish()?;
+    let mut failed = outcome.is_err();
+    // Rerun's file writer says only that it stopped: say what happened,
+    // whether a frame's logging or the summary's found it stopped.
+    let frame = run.scene.frame();
+    let told = |e: &RunError| match (e, &args.save) {
+        (RunError::Telemetry(_) | RunError::Flush(_), Some(path)) => {
+            failure::write_failure(path, frame)
+        }
+        _ => e.to_string(),
+    };
+    let figures = match outcome {
+        Err(e) => {
+            eprintln!("error: {}", told(&e));
+            // A stream that failed takes no summary; the figures are told.
+            run.figures()
+        }
+        Ok(()) => {
+            let so_far = run.figures();
+            match run.finish() {
+                Ok(figures) => figures,
+                Err(e) if args.save.is_some() => {
+                    eprintln!("error: {}", told(&e));
+                    failed = true;
+                    so_far
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+    };
     drop(rec);
     let checks = verdict(preset.expect.as_ref(), &figures);
     eprint!("{}", table(&figures, &checks));
