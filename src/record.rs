@@ -299,19 +299,33 @@ impl Run {
     /// Logs the summary of the run so far (what `weft replay` checks against).
     pub fn log_summary(&self) -> Result<Figures, RunError> {
         let figures = self.figures();
-        let text = toml::to_string(&figures).expect("figures serialize");
+        self.log_figures(&figures)?;
+        Ok(figures)
+    }
+
+    fn log_figures(&self, figures: &Figures) -> Result<(), RunError> {
+        let text = toml::to_string(figures).expect("figures serialize");
         self.telemetry.stream().log_static(
             paths::SUMMARY,
             &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
         )?;
-        Ok(figures)
+        Ok(())
     }
 
     /// Logs the end-of-run summary, flushes, and returns the figures.
     pub fn finish(self) -> Result<Figures, RunError> {
-        let figures = self.log_summary()?;
-        self.telemetry.flush()?;
-        Ok(figures)
+        let (figures, written) = self.close();
+        written.map(|()| figures)
+    }
+
+    /// [`Run::finish`], the figures kept whether or not the recording took
+    /// them (a recording that failed is still reported).
+    pub fn close(self) -> (Figures, Result<(), RunError>) {
+        let figures = self.figures();
+        let written = self
+            .log_figures(&figures)
+            .and_then(|()| Ok(self.telemetry.flush()?));
+        (figures, written)
     }
 }
 

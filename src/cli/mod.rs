@@ -319,18 +319,15 @@ fn record(args: RecordArgs) -> anyhow::Result<ExitCode> {
             // A stream that failed takes no summary; the figures are told.
             run.figures()
         }
-        Ok(()) => {
-            let so_far = run.figures();
-            match run.finish() {
-                Ok(figures) => figures,
-                Err(e) if args.save.is_some() => {
-                    eprintln!("error: {}", told(&e));
-                    failed = true;
-                    so_far
-                }
-                Err(e) => return Err(e.into()),
+        Ok(()) => match run.close() {
+            (figures, Ok(())) => figures,
+            (figures, Err(e)) if args.save.is_some() => {
+                eprintln!("error: {}", told(&e));
+                failed = true;
+                figures
             }
-        }
+            (_, Err(e)) => return Err(e.into()),
+        },
     };
     drop(rec);
     let checks = verdict(preset.expect.as_ref(), &figures);
