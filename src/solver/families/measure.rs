@@ -1,12 +1,11 @@
 //! Measuring the families' violations: over the whole cloth for the
 //! figures and plots, and per particle for colouring and inspecting.
 
-use super::Family;
-use super::PerFamily;
+use super::{Family, PerFamily};
 use crate::solver::cloth::{ClothSpec, ClothState};
 use crate::solver::diagnostics::{Tally, Violation};
 use crate::solver::team;
-use crate::solver::topology::{Batched, Topology};
+use crate::solver::topology::{Batched, Pair, Topology, Triple};
 
 /// The cloth a measurement reads, and how.
 pub(crate) struct Measure<'a> {
@@ -18,6 +17,25 @@ pub(crate) struct Measure<'a> {
     /// Each element's angle to its surface, when already measured
     /// ([`normal_offsets`](crate::solver::diagnostics::normal_offsets)).
     pub offsets: Option<&'a [f32]>,
+}
+
+impl<'a> Measure<'a> {
+    /// `state`'s violations over `topology`'s constraints, on up to
+    /// `threads` threads.
+    pub(crate) fn new(
+        state: &'a ClothState,
+        topology: &'a Topology,
+        spec: &'a ClothSpec,
+        threads: usize,
+    ) -> Self {
+        Self {
+            state,
+            topology,
+            spec,
+            threads,
+            offsets: None,
+        }
+    }
 }
 
 /// The violation of one family over the constraints it projects (for
@@ -95,7 +113,7 @@ pub fn particle_violation_at(
     largest
 }
 
-/// The violation `f` of every item of `set`, tallied in blocks on up to
+/// The violation `f` of every one of `items`, tallied in blocks on up to
 /// `threads` threads and merged in block order.
 pub(crate) fn tally<T: Copy + Sync>(
     threads: usize,
@@ -119,9 +137,9 @@ pub(crate) fn tally<T: Copy + Sync>(
 /// Calls `put` for both ends of every pair of `set` (given `only`, of the
 /// pairs that involve it) with the pair's violation `f`.
 pub(crate) fn each_pair(
-    set: &Batched<crate::solver::topology::Pair>,
+    set: &Batched<Pair>,
     only: Option<u32>,
-    f: impl Fn(crate::solver::topology::Pair) -> f32,
+    f: impl Fn(Pair) -> f32,
     put: &mut dyn FnMut(u32, f32),
 ) {
     for &p in set.items.iter().filter(|p| wanted(only, &[p.a, p.b])) {
@@ -133,9 +151,9 @@ pub(crate) fn each_pair(
 
 /// [`each_pair`] for the bend triples of `set`: all three particles.
 pub(crate) fn each_triple(
-    set: &Batched<crate::solver::topology::Triple>,
+    set: &Batched<Triple>,
     only: Option<u32>,
-    f: impl Fn(crate::solver::topology::Triple) -> f32,
+    f: impl Fn(Triple) -> f32,
     put: &mut dyn FnMut(u32, f32),
 ) {
     for &t in set

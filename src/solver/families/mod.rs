@@ -52,7 +52,6 @@ mod per_family;
 
 use std::fmt;
 
-use super::cloth::{ClothSpec, ClothState};
 use super::diagnostics::Violation;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
@@ -323,24 +322,4 @@ families! {
     stretch::Stretch,
     /// Cloth–cloth contact: the layers stay the thickness apart.
     self_collision::SelfCollision,
-}
-
-/// The cloth a measurement reads.
-impl<'a> Measure<'a> {
-    /// `state`'s violations over `topology`'s constraints, on up to
-    /// `threads` threads.
-    pub(crate) fn new(
-        state: &'a ClothState,
-        topology: &'a Topology,
-        spec: &'a ClothSpec,
-        threads: usize,
-    ) -> Self {
-        Self {
-            state,
-            topology,
-            spec,
-            threads,
-            offsets: None,
-        }
-    }
 }
