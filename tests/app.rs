@@ -332,14 +332,7 @@ fn each_run_is_its_own_recording() {
 fn a_branch_is_bit_identical_up_to_its_frame() {
     let loaded = load::load("hanging_sheet", &[]).unwrap();
     let session = Session::start(loaded, "hanging_sheet".into(), |_| {}).unwrap();
-    let step_to = |frame: u64| {
-        let now = session.status().frame;
-        for _ in now..frame {
-            session.send(Command::Step);
-        }
-        assert!(session.wait_for(WAIT, |s| s.frame == frame));
-        session.status().digest
-    };
+    let step_to = |frame: u64| common::panel::step_to(&session, frame);
     let at_45 = step_to(45);
     let tuning =
         |s: &weft::app::session::Status| weft::scene::Tuning::of(s.preset.as_ref().unwrap());

@@ -127,19 +127,7 @@ fn a_drag_pulls_the_particle_and_replays_bit_for_bit() {
 fn a_branch_in_the_middle_of_a_drag_is_bit_identical() {
     let loaded = load::load("hanging_sheet", &[]).unwrap();
     let session = Session::start(loaded, "hanging_sheet".into(), |_| {}).unwrap();
-    let step_to = |frame: u64| {
-        let now = session.status().frame;
-        for _ in now..frame {
-            session.send(Command::Step);
-        }
-        assert!(
-            session.wait_for(WAIT, |s| s.frame == frame),
-            "{frame}: {:?} at {}",
-            session.status().error,
-            session.status().frame
-        );
-        session.status().digest
-    };
+    let step_to = |frame: u64| common::panel::step_to(&session, frame);
     step_to(40);
     let preset = session.status().preset.unwrap();
     let mut scene = weft::scene::Scene::new(&preset).unwrap();

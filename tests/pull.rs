@@ -5,19 +5,13 @@
 //! nothing; and without a pull a run is what it was before pulls existed,
 //! bit for bit.
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use proptest::prelude::*;
 use weft::scene::{Scene, Tuning, load};
-use weft::solver::{ClothSpec, Environment, Params, Pull, Solver};
+use weft::solver::{ClothSpec, Params, Pull, Solver};
 
-/// No gravity, no air: nothing acts from outside.
-fn calm() -> Environment {
-    Environment {
-        gravity: Vec3::ZERO,
-        air_density: 0.0,
-        ..Environment::default()
-    }
-}
+mod common;
+use common::calm;
 
 /// An `n × n` cloth, exactly flat at rest.
 fn sheet(n: u32) -> Solver {

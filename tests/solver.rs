@@ -10,19 +10,13 @@
 use glam::{Quat, Vec3};
 use proptest::prelude::*;
 use weft::solver::update::wind_acceleration;
+
+mod common;
+use common::calm;
 use weft::solver::{
     ClothSpec, Environment, Family, ForcedRotation, Params, Pose, Shape, Solver, StepError,
     Weights, Width,
 };
-
-/// No gravity, no air: nothing acts from outside.
-fn calm() -> Environment {
-    Environment {
-        gravity: Vec3::ZERO,
-        air_density: 0.0,
-        ..Environment::default()
-    }
-}
 
 /// An `n × n` cloth, exactly flat at rest.
 fn spec(n: u32) -> ClothSpec {

@@ -30,3 +30,12 @@ pub fn interrupt_when(child: &mut Child, what: &str, ready: impl Fn() -> bool) -
     assert!(kill.success());
     child.wait().expect("the child ends").code()
 }
+
+/// No gravity, no air: nothing acts on a cloth from outside.
+pub fn calm() -> weft::solver::Environment {
+    weft::solver::Environment {
+        gravity: glam::Vec3::ZERO,
+        air_density: 0.0,
+        ..weft::solver::Environment::default()
+    }
+}

@@ -5,7 +5,10 @@ use std::time::Duration;
 
 use egui::accesskit::{Action, ActionData, ActionRequest};
 use egui_kittest::{Harness, kittest::NodeT, kittest::Queryable};
-use weft::app::{panel::Panel, session::Session};
+use weft::app::{
+    panel::Panel,
+    session::{Command, Session},
+};
 use weft::scene::load;
 
 /// What the harness holds: the panel and its session.
@@ -47,4 +50,19 @@ pub fn set_slider(h: &mut Harness<'_, State>, label: &str, value: f64) {
         data: Some(ActionData::NumericValue(value)),
     }));
     h.run();
+}
+
+/// Steps `session` to `frame` and returns its state's digest there.
+pub fn step_to(session: &Session, frame: u64) -> String {
+    let now = session.status().frame;
+    for _ in now..frame {
+        session.send(Command::Step);
+    }
+    assert!(
+        session.wait_for(WAIT, |s| s.frame == frame),
+        "{frame}: {:?} at {}",
+        session.status().error,
+        session.status().frame
+    );
+    session.status().digest
 }
