@@ -22,7 +22,7 @@ pub fn file_batching() -> Result<rerun::log::ChunkBatcherConfig, rerun::log::Chu
 
 /// The batching of a stream to the window: chunks are sent when
 /// [`Telemetry::log_frame`](super::Telemetry::log_frame) has logged a frame's drawing
-/// ([`Telemetry::send_drawings_whole`](super::Telemetry::send_drawings_whole)), and otherwise once a second, so
+/// ([`Telemetry::send`](super::Telemetry::send)), and otherwise once a second, so
 /// that the viewer never receives part of a frame's drawing.
 pub fn whole_frames() -> rerun::log::ChunkBatcherConfig {
     rerun::log::ChunkBatcherConfig {

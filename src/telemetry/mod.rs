@@ -109,8 +109,6 @@ pub struct Telemetry {
     /// Whether the next frames log what the 3D view draws, or their
     /// scalars only ([`Self::set_visuals`]).
     visuals: bool,
-    /// Whether each frame's drawing is flushed as soon as it is logged.
-    whole_drawings: bool,
     /// Whether the last logged frame drew a pull.
     pull_drawn: bool,
 }
@@ -130,7 +128,6 @@ impl Telemetry {
             drawn: full::Drawn::default(),
             crossings_drawn: false,
             visuals: true,
-            whole_drawings: false,
             pull_drawn: false,
         }
     }
@@ -139,12 +136,17 @@ impl Telemetry {
     /// (particles, mesh, normals, arrows, crossings, colliders, bodies), or
     /// only their scalars. On unless turned off: the desktop debugger logs
     /// a frame's drawing only when the window has drawn the one before, so
-    /// the viewer is never sent more than it can show, and a frame's
-    /// drawing is sent whole, at once ([`Self::log_frame`]), so the view
-    /// never mixes two frames. Turned back on, the next frame draws
-    /// everything afresh.
+    /// the viewer is never sent more than it can show, and sends each
+    /// drawing whole ([`Self::send`]), so the view never mixes two frames.
+    /// Turned back on, the next frame draws everything afresh.
     pub fn set_visuals(&mut self, on: bool) {
         self.visuals = on;
+    }
+
+    /// Whether frame `frame` is logged with its drawing
+    /// ([`Self::set_visuals`]).
+    pub fn draws_frame(&self, frame: u64) -> bool {
+        self.visuals && self.logs_frame(frame)
     }
 
     /// Whether each frame at level full also logs every particle's values
@@ -455,7 +457,6 @@ impl Telemetry {
 
         if self.visuals {
             self.log_visuals(scene)?;
-            self.send_drawing();
         }
         self.last_cost = start.elapsed();
         Ok(())
@@ -469,28 +470,18 @@ impl Telemetry {
             return Ok(());
         }
         self.set_time(scene.frame(), scene.time());
-        self.log_visuals(scene)?;
-        self.send_drawing();
-        Ok(())
+        self.log_visuals(scene)
     }
 
-    /// Sends what is logged so far, with the frame's drawing just logged,
-    /// as one, if drawings are sent whole: the view never shows part of a
-    /// frame. (A flush of a stream to the window does not fail; if one
-    /// did, the batcher's tick would send the drawing a second later.)
-    fn send_drawing(&self) {
-        if self.whole_drawings
-            && let Err(e) = self.rec.flush_async()
-        {
+    /// Sends what is logged so far to the sink at once: for a stream whose
+    /// batcher does not flush on its own ([`whole_frames`], the window's),
+    /// after a frame's whole drawing, so the view never shows part of one.
+    /// (A flush of a stream to the window does not fail; if one did, the
+    /// batcher's tick would send the drawing a second later.)
+    pub fn send(&self) {
+        if let Err(e) = self.rec.flush_async() {
             re_log::warn_once!("sending a frame to the window: {e}");
         }
-    }
-
-    /// Sends each frame's drawing to the sink whole, as soon as it is
-    /// logged, for a stream whose batcher does not flush on its own (the
-    /// window's: [`whole_frames`]).
-    pub fn send_drawings_whole(&mut self) {
-        self.whole_drawings = true;
     }
 
     /// Logs what the 3D view draws of the scene's current frame (at the

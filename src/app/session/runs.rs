@@ -177,7 +177,6 @@ pub(super) fn open(
     telemetry.set_framing(true);
     // The correction arrows cover the cloth: the panel turns them on.
     telemetry.set_arrows(false);
-    telemetry.send_drawings_whole();
     let mut run = match (scene, snapshot) {
         (Some((scene, resolved)), _) => Run::start(scene, telemetry, preset_name, &resolved),
         (_, Some(snapshot)) => {

@@ -36,9 +36,10 @@ impl Worker {
             drawn: false,
         });
         self.draw_ghost(true);
+        self.run.telemetry.send();
     }
 
-    /// Draws the parent at the current frame, if the run logs this frame
+    /// Draws the parent at the current frame, if the run draws this frame
     /// (or `now`: the ghost was just turned on or off); clears it once when
     /// it is turned off or the parent never reached the frame.
     pub(super) fn draw_ghost(&mut self, now: bool) {
@@ -47,7 +48,7 @@ impl Worker {
         let Some(g) = self.ghost.as_mut() else {
             return;
         };
-        if !now && !self.run.telemetry.logs_frame(frame) {
+        if !now && !self.run.telemetry.draws_frame(frame) {
             return;
         }
         let positions = g.parent.at(frame).filter(|_| self.show_ghost);

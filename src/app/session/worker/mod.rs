@@ -153,9 +153,12 @@ impl Worker {
             if !self.playing && self.drawing_behind {
                 // Stopped on a frame sent without its drawing: send it.
                 self.drawing_behind = false;
+                self.run.telemetry.set_visuals(true);
                 if let Err(e) = self.run.telemetry.redraw(&self.run.scene) {
                     self.set_error(Some(format!("logging to the viewer failed: {e}")));
                 }
+                self.draw_ghost(false);
+                self.run.telemetry.send();
             }
             if self.playing && self.viewer_behind() {
                 // Wait for the viewer; then go on at the usual pace, without
@@ -269,6 +272,7 @@ impl Worker {
             Command::Ghost(on) => {
                 self.show_ghost = on;
                 self.draw_ghost(true);
+                self.run.telemetry.send();
             }
             Command::Grab(at) => {
                 let at = glam::Vec3::from_array(at).as_dvec3() + self.seen_to_now();
@@ -405,6 +409,10 @@ impl Worker {
                 }
                 self.keep_frame();
                 self.draw_ghost(false);
+                if draws {
+                    // The frame's drawing, the ghost with it, sent whole.
+                    self.run.telemetry.send();
+                }
             }
             Err(e) => {
                 self.playing = false;
