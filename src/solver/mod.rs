@@ -78,7 +78,7 @@ use glam::{DVec3, Vec3};
 use collision::Contact;
 use diagnostics::CorrectionTrack;
 use families::{Multipliers, stretch};
-use self_collision::SelfContacts;
+use self_collision::{Offsets, SelfContacts};
 use update::FREE;
 
 /// A particle that follows a body exactly.
@@ -174,6 +174,12 @@ pub struct Solver {
     reference_body: Vec<u32>,
     multipliers: Multipliers,
     self_contacts: SelfContacts,
+    /// How far each particle may move before the cloth could cross itself.
+    offsets: Offsets,
+    /// Scratch: where the sweeps took the particles, while they are clamped.
+    offset_target: Vec<Vec3>,
+    /// Substeps left that a jerk leaves unbounded ([`Solver::watch_for_jerks`]).
+    unbounded: u32,
     rest_position: Vec<Vec3>,
     // Scratch, kept to avoid allocating per step.
     sub_from: Vec<Pose>,
@@ -219,6 +225,9 @@ impl Solver {
             reference_body: vec![FREE; n],
             multipliers: Multipliers::default(),
             self_contacts: SelfContacts::default(),
+            offsets: Offsets::default(),
+            offset_target: Vec::new(),
+            unbounded: 0,
             rest_position: (0..spec.warp)
                 .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))
                 .collect(),

@@ -69,6 +69,9 @@ impl Solver {
         let frame = self.frame.step_to(origin, substeps, self.steps == 0);
         if self.self_collision_on() {
             self.watch_for_jerks(bodies, origin);
+            self.watch_for_crossings();
+        } else {
+            self.offsets.clear();
         }
         if self.steps == 0 {
             self.start_with_carriers(bodies);
@@ -151,8 +154,12 @@ impl Solver {
         sub: u32,
         last: bool,
     ) -> Result<(), NonFinite> {
-        if self.self_collision_on() && self.self_contacts.leave_tangles_this_substep() {
+        let bounded = self.self_collision_on();
+        if bounded && self.self_contacts.leave_tangles_this_substep() {
             self.find_tangles();
+        }
+        if bounded {
+            self.find_offsets();
         }
         let t = self.stopwatch();
         let threads = self.threads();
@@ -188,6 +195,9 @@ impl Solver {
         }
         self.check_finite("update")?;
         self.charge(t, |d| &mut d.timings.update);
+        if bounded {
+            self.clamp_to_offsets(false);
+        }
 
         self.collider_from.clear();
         self.collider_to.clear();
@@ -260,6 +270,10 @@ impl Solver {
             // Friction slides along the surface, which on a curved one can
             // dip a particle back in: one more push keeps every particle out.
             self.project_colliders(margin);
+        }
+        if bounded {
+            self.keep_edges_apart();
+            self.clamp_to_offsets(true);
         }
         // Turns leave quaternions unit to rounding only; renormalise once.
         for q in &mut self.state.orientation {

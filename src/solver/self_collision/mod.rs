@@ -48,6 +48,7 @@
 //! tangles a jerk leaves.
 
 pub(crate) mod broad_phase;
+mod offset;
 mod pick;
 mod step;
 mod tangles;
@@ -58,6 +59,7 @@ use crate::solver::cloth::normal_of;
 use crate::solver::kernels::{Particles, delta_mu, shift};
 use crate::solver::topology::Touches;
 
+pub(crate) use offset::{EDGE_GAP, Offsets};
 pub(crate) use pick::{Layers, SelfContacts};
 pub use tangles::{ON_PLANE, crossing_points, crossings, for_each_close};
 

@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::Layers;
+use super::{EDGE_GAP, Layers};
 use crate::solver::collision::Pose;
 use crate::solver::{Attachment, Family, Solver};
 
@@ -49,7 +49,92 @@ impl Solver {
         if jerk {
             self.self_contacts
                 .watch_for_tangles((JERK_WATCH + 1) * self.params.substeps);
+            // Nor are the particles bounded meanwhile: held to their bounds,
+            // the free particles could not follow the jerked ones.
+            self.unbounded = (JERK_WATCH + 1) * self.params.substeps;
         }
+    }
+
+    /// Looks for crossings at the step's start unless the cloth is known to
+    /// be free of them (the offset bounds keep it so, but for a driven
+    /// particle that went beyond its bound, or a jerk): if any, the tangled
+    /// particles are left alone, exempt from their bounds and from the
+    /// contacts, until they come apart.
+    pub(in crate::solver) fn watch_for_crossings(&mut self) {
+        if self.self_contacts.watching() {
+            // Tangled particles move freely: look again once they are apart.
+            self.offsets.checked = false;
+            return;
+        }
+        if self.offsets.checked {
+            return;
+        }
+        let tangled = !self.find_tangles().is_empty();
+        self.offsets.checked = !tangled;
+        if tangled {
+            self.self_contacts.watch_for_tangles(self.params.substeps);
+        }
+    }
+
+    /// Finds every particle's offset bound at the substep's start, unless
+    /// the last ones still hold or a jerk leaves this substep unbounded.
+    pub(in crate::solver) fn find_offsets(&mut self) {
+        if self.unbounded > 0 {
+            self.unbounded -= 1;
+            self.offsets.clear();
+            return;
+        }
+        let t = self.stopwatch();
+        let exempt = self.self_contacts.tangled();
+        if exempt.is_some() || !self.offsets.hold(&self.state.position, &self.inv_mass) {
+            self.offsets.find(
+                &self.state.position,
+                &self.topology.triangles,
+                &self.spec,
+                exempt,
+            );
+        }
+        self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
+    }
+
+    /// Pushes apart the edge pairs the bounds found nearer than a fraction
+    /// of the thickness.
+    pub(in crate::solver) fn keep_edges_apart(&mut self) {
+        self.offsets.keep_edges_apart(
+            &mut self.state.position,
+            &self.inv_mass,
+            EDGE_GAP * self.spec.thickness,
+        );
+    }
+
+    /// Brings every particle within its offset bound. At the substep's end
+    /// (`rounds`), where that moved a particle, the bounds are found again at
+    /// the clamped state (free of crossings like the substep's start) and
+    /// the particles go on from there towards where the sweeps took them, up
+    /// to [`OFFSET_ROUNDS`] times: a particle held back by a near layer
+    /// catches up with the rest instead of stretching its edges.
+    pub(in crate::solver) fn clamp_to_offsets(&mut self, rounds: bool) {
+        let t = self.stopwatch();
+        let rounds = if rounds { OFFSET_ROUNDS } else { 1 };
+        let mut target = std::mem::take(&mut self.offset_target);
+        for round in 1..=rounds {
+            if round == 1 && rounds > 1 {
+                target.clone_from(&self.state.position);
+            }
+            let moved = self.offsets.clamp(&mut self.state.position, &self.inv_mass);
+            if moved == 0 || round == rounds {
+                break;
+            }
+            self.offsets.find(
+                &self.state.position,
+                &self.topology.triangles,
+                &self.spec,
+                self.self_contacts.tangled(),
+            );
+            self.state.position.copy_from_slice(&target);
+        }
+        self.offset_target = target;
+        self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
     }
 
     /// Whether the self-collision family is on (its weight above 0).
@@ -88,6 +173,10 @@ const SELF_CONTACT_SLACK: f32 = 0.25;
 /// step to the next before self-collision leaves tangles alone
 /// ([`Solver::watch_for_jerks`]).
 const JERK: f32 = 2.0;
+
+/// How many times a substep's end may be clamped to the offset bounds,
+/// finding them again in between ([`Solver::clamp_to_offsets`]).
+const OFFSET_ROUNDS: u32 = 6;
 
 /// How many steps after a jerk self-collision leaves tangles alone.
 const JERK_WATCH: u32 = 60;

@@ -172,6 +172,18 @@ impl SelfContacts {
         points
     }
 
+    /// The tangled particles, while this substep leaves them out of the
+    /// contacts ([`SelfContacts::leave_tangles_this_substep`]).
+    pub(crate) fn tangled(&self) -> Option<&[bool]> {
+        self.leaving.then_some(&self.tangled[..])
+    }
+
+    /// Whether tangles are being left alone: a watch is on, or tangles it
+    /// found are still there.
+    pub(crate) fn watching(&self) -> bool {
+        self.watch > 0 || self.leaving
+    }
+
     /// Leaves tangled particles out of the contacts for the next `substeps`
     /// substeps.
     pub(crate) fn watch_for_tangles(&mut self, substeps: u32) {

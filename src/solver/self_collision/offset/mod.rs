@@ -1,0 +1,291 @@
+//! Offset bounds: how far each particle may move before a crossing could
+//! form (after Chen et al., "Offset Geometric Contact", ACM TOG 2025).
+//!
+//! **The bound.** At a state `X⁰` free of crossings, let `d_i` be the
+//! smallest distance from a primitive of particle `i` (the particle itself,
+//! its edges) to a primitive it shares no particle with: a particle against
+//! a triangle, an edge against an edge; capped at the query radius `r`.
+//! Let every particle stay within `b_i = γ d_i` (`γ < ½`) of where a common
+//! translation `T` would carry it: `|x_i − X⁰_i − T| ≤ b_i`. A translation
+//! changes no distance, and a point of a primitive is a convex combination
+//! of its corners, so it moves (beyond `T`) by at most the largest `b` of
+//! its corners; a pair at distance `D ≥ max(d_i)` over its corners comes
+//! no nearer than `D − 2γD > 0`. Each such set of states is convex (a ball
+//! per particle, shifted by any `T`), so the straight path between two
+//! states that both satisfy it, as a substep's update and sweeps move the
+//! particles, satisfies it too. No pair reaches distance 0 on the way, and
+//! an edge that crosses a triangle only by passing through its border
+//! (edge against edge) or by an end passing through its face (particle
+//! against triangle): **no crossing forms**. No continuous collision test
+//! is needed, only the distances at `X⁰`.
+//!
+//! **In weft.** The bounds are found at the start of a substep, from its
+//! crossing-free positions, and kept for the following substeps while every
+//! particle is still within half its bound (a cloth at rest, or carried
+//! along, keeps them; a flap finds them again). After the update and again
+//! at the end of the substep, every free particle is brought back within its
+//! ball ([`Offsets::clamp`]), relative to the particles' mean displacement,
+//! so a cloth carried along at speed is not held back. Driven particles
+//! follow their bodies and are not clamped. Tangled particles (a jerk drags
+//! the cloth through itself) are exempt: their state is not free of
+//! crossings, and the bound would hold the tangle instead of letting it
+//! come apart.
+//!
+//! The distances come from a list of the primitive pairs near enough to
+//! matter, kept from one search to the next while the particles drift
+//! less than a skin (`pairs.rs`); the distance functions are in
+//! `distance.rs`. A minimum does not depend on the order pairs are met in,
+//! and the edge pairs pushed apart come in the list's order, which the
+//! positions alone fix: the bounds are the same for any number of threads.
+
+mod distance;
+mod pairs;
+
+use glam::Vec3;
+
+use pairs::{NearPairs, Nearest};
+
+use crate::solver::cloth::ClothSpec;
+
+/// The fraction of the distance each particle may move: below ½, with room
+/// for rounding.
+pub(crate) const GAMMA: f32 = 0.4;
+
+/// The query radius, in rest spacings: distances beyond it count as it.
+/// In a flat, unstretched grid no primitive comes nearer to one it shares
+/// no particle with than `1/√2` of a spacing (a corner against the
+/// diagonal across its cell), so a flat cloth finds no pair at all.
+pub(crate) const RADIUS: f32 = 0.5;
+
+/// How near, in thicknesses, two edges may come before they are pushed
+/// apart ([`Offsets::keep_edges_apart`]).
+pub(crate) const EDGE_GAP: f32 = 0.25;
+
+/// How much more a driven particle weighs than a free one with the same
+/// bound in the common motion ([`Offsets::common_motion`]).
+const DRIVEN_WEIGHT: f64 = 1e4;
+
+/// Each particle's bound, and where it was found.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Offsets {
+    near: NearPairs,
+    /// The positions the bounds were found at; empty: none yet.
+    start: Vec<Vec3>,
+    /// Per particle, how far beyond the common motion it may move from
+    /// `start` (infinite for an exempt particle).
+    bound: Vec<f32>,
+    /// Scratch: per particle, the smallest distance found.
+    nearest: Vec<f32>,
+    /// The edge pairs nearer than the thickness.
+    pairs: Vec<EdgePair>,
+    /// Whether no crossing can have formed since the cloth was last found
+    /// free of them: false once a driven particle, which is not clamped,
+    /// went beyond its bound.
+    pub checked: bool,
+}
+
+impl Offsets {
+    /// Forgets the bounds: the next substep finds them again.
+    pub(crate) fn clear(&mut self) {
+        self.start.clear();
+        self.near.clear();
+        self.checked = false;
+    }
+
+    /// Whether the bounds found at an earlier substep still leave every
+    /// particle at `x` room to move: each within half its bound of where
+    /// the common motion carried it (a driven particle too, which its body
+    /// moves regardless).
+    pub(crate) fn hold(&self, x: &[Vec3], inv_mass: &[f32]) -> bool {
+        if self.start.len() != x.len() {
+            return false;
+        }
+        let t = self.common_motion(x, inv_mass);
+        if !t.is_finite() {
+            return false;
+        }
+        x.iter()
+            .zip(&self.start)
+            .zip(&self.bound)
+            .all(|((&now, &then), &b)| b == f32::INFINITY || (now - then - t).length() <= 0.5 * b)
+    }
+
+    /// Finds every particle's bound at positions `x` (free of crossings but
+    /// for the `exempt` particles, whose bound is infinite).
+    pub(crate) fn find(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        exempt: Option<&[bool]>,
+    ) {
+        let n = x.len();
+        let (dx, dy) = spec.spacing();
+        let r = RADIUS * dx.min(dy);
+        self.start.clear();
+        self.start.extend_from_slice(x);
+        self.nearest.clear();
+        self.nearest.resize(n, r);
+        self.pairs.clear();
+        let found = self.near.nearest(
+            x,
+            triangles,
+            spec,
+            r,
+            Nearest {
+                nearest: &mut self.nearest,
+                pairs: &mut self.pairs,
+                keep: (EDGE_GAP * spec.thickness).min(r),
+            },
+        );
+        // In one order whatever the search met them in: they are pushed
+        // apart one after another.
+        self.pairs.sort_unstable_by_key(|p| (p.e, p.f));
+        self.bound.clear();
+        if !found {
+            self.bound.resize(n, 0.0);
+            return;
+        }
+        self.bound
+            .extend(self.nearest.iter().enumerate().map(|(i, &d)| {
+                if exempt.is_some_and(|t| t.get(i) == Some(&true)) {
+                    f32::INFINITY
+                } else {
+                    GAMMA * d
+                }
+            }));
+    }
+
+    /// Brings every free particle at `x` back within its bound of where
+    /// the particles' mean displacement since the bounds were found
+    /// carried it.
+    /// A driven particle beyond its bound is left where its body holds it,
+    /// and the cloth is no longer known to be free of crossings.
+    /// Returns how many free particles it moved.
+    pub(crate) fn clamp(&mut self, x: &mut [Vec3], inv_mass: &[f32]) -> usize {
+        let mut moved = 0;
+        if self.start.len() != x.len() {
+            return moved;
+        }
+        let t = self.common_motion(x, inv_mass);
+        if !t.is_finite() {
+            return moved;
+        }
+        for (((now, &then), &b), &w) in x.iter_mut().zip(&self.start).zip(&self.bound).zip(inv_mass)
+        {
+            if b == f32::INFINITY {
+                continue;
+            }
+            let rel = *now - then - t;
+            let len2 = rel.length_squared();
+            if len2 > b * b {
+                if w == 0.0 {
+                    self.checked = false;
+                    continue;
+                }
+                *now = then + t + rel * (b / len2.sqrt());
+                moved += 1;
+            }
+        }
+        moved
+    }
+}
+
+impl Offsets {
+    /// The common translation the bounds are measured from: the mean
+    /// displacement since the bounds were found, each particle weighted by
+    /// `1 / b²`, so that the particles with the least room (near another
+    /// layer, resting on a collider) move least beyond it, and the driven
+    /// particles, which cannot be clamped, [`DRIVEN_WEIGHT`] times more.
+    fn common_motion(&self, x: &[Vec3], inv_mass: &[f32]) -> Vec3 {
+        let (mut sum, mut weight) = (glam::DVec3::ZERO, 0.0f64);
+        for (((a, b), &bound), &m) in x.iter().zip(&self.start).zip(&self.bound).zip(inv_mass) {
+            if bound == f32::INFINITY {
+                continue;
+            }
+            let driven = if m == 0.0 { DRIVEN_WEIGHT } else { 1.0 };
+            let w = driven / (bound as f64).max(1e-9).powi(2);
+            sum += (*a - *b).as_dvec3() * w;
+            weight += w;
+        }
+        if weight > 0.0 {
+            (sum / weight).as_vec3()
+        } else {
+            mean_displacement(x, &self.start)
+        }
+    }
+}
+
+impl Offsets {
+    /// Pushes every edge pair found nearer than the thickness apart to it,
+    /// along the direction between their nearest points when found (the
+    /// side they were on), one pair after another; pairs with an exempt
+    /// particle are left alone.
+    pub(crate) fn keep_edges_apart(&self, x: &mut [Vec3], inv_mass: &[f32], thickness: f32) {
+        if self.start.len() != x.len() {
+            return;
+        }
+        for p in &self.pairs {
+            let [e0, e1] = p.e.map(|k| k as usize);
+            let [f0, f1] = p.f.map(|k| k as usize);
+            if [e0, e1, f0, f1]
+                .iter()
+                .any(|&k| self.bound[k] == f32::INFINITY)
+            {
+                continue;
+            }
+            let [s, t] = p.at;
+            let pe = x[e0] + (x[e1] - x[e0]) * s;
+            let pf = x[f0] + (x[f1] - x[f0]) * t;
+            let c = (pe - pf).dot(p.normal) - thickness;
+            if c >= 0.0 {
+                continue;
+            }
+            let k = [1.0 - s, s, 1.0 - t, t];
+            let ids = [e0, e1, f0, f1];
+            let w: f32 = (0..4).map(|j| k[j] * k[j] * inv_mass[ids[j]]).sum();
+            if w <= 0.0 {
+                continue;
+            }
+            let l = -c / w;
+            for j in 0..4 {
+                let sign = if j < 2 { 1.0 } else { -1.0 };
+                x[ids[j]] += p.normal * (sign * l * k[j] * inv_mass[ids[j]]);
+            }
+        }
+    }
+}
+
+/// Two edges nearer than the thickness at the bounds' positions, kept
+/// apart along the direction between their nearest points there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct EdgePair {
+    pub(super) e: [u32; 2],
+    pub(super) f: [u32; 2],
+    /// Where along `e` and `f` the nearest points were.
+    pub(super) at: [f32; 2],
+    /// From `f`'s nearest point to `e`'s, unit.
+    pub(super) normal: Vec3,
+}
+
+/// The mean displacement from `then` to `now`, every particle alike.
+fn mean_displacement(now: &[Vec3], then: &[Vec3]) -> Vec3 {
+    let mut sum = glam::DVec3::ZERO;
+    for (a, b) in now.iter().zip(then) {
+        sum += (*a - *b).as_dvec3();
+    }
+    (sum / now.len().max(1) as f64).as_vec3()
+}
+
+/// The edges particle `p` owns, towards higher indices, with their
+/// direction `k` (0 weft, 1 warp, 2 diagonal): every edge of the mesh is
+/// owned by its lower end.
+#[inline(always)]
+pub(super) fn owned_edges(p: u32, spec: &ClothSpec) -> impl Iterator<Item = (u8, u32)> {
+    let w = spec.weft;
+    let (i, j) = (p % w, p / w);
+    let (right, up) = (i + 1 < w, j + 1 < spec.warp);
+    [(right, 0u8, 1), (up, 1, w), (right && up, 2, w + 1)]
+        .into_iter()
+        .filter_map(move |(there, k, o)| there.then_some((k, p + o)))
+}
