@@ -40,12 +40,20 @@
 //! grid edges that cross a triangle they share no vertex with
 //! ([`crossings`]), which a crossing-free cloth keeps at zero.
 //!
+//! Contacts keep layers apart but cannot by themselves promise that no
+//! crossing forms (a particle can pass a layer it had no contact with; two
+//! edges can pass through each other with no particle over a face). The
+//! **offset bounds** do (`offset/`): every particle's move is held to a
+//! fraction of its distance to the nearest primitive it shares no particle
+//! with, found at a crossing-free state, so that no pair reaches distance 0
+//! on the way.
+//!
 //! Here: the contact, its projection and friction; the family that
 //! projects the contacts is [`families::self_collision`](super::families::self_collision).
 //! `broad_phase.rs`: the spatial hash and the near pairs it keeps.
 //! `pick.rs`: the contact search of a substep (`SelfContacts`).
 //! `tangles.rs`: the measures (penetration depths, crossings) and the
-//! tangles a jerk leaves.
+//! tangles a jerk leaves. `offset/`: the offset bounds (`Offsets`).
 
 pub(crate) mod broad_phase;
 mod offset;
