@@ -9,11 +9,12 @@
 //! |---|---|---|
 //! | `shape` | RMS distance between the lattice points' mean positions | the cloth's larger side `L` |
 //! | `spread` | RMS difference of the lattice points' spreads | `L` |
-//! | `amplitude` | the free edge's flapping amplitudes | the larger of the two (at least `L/100`) |
-//! | `frequency` | the free edge's dominant frequencies, in octaves | counted only as far as both edges move (`L/50` fully) |
-//! | `strain` | the largest edge strain, averaged over time | the larger of the two (at least 0.005) |
+//! | `amplitude` | the free edge's flapping amplitudes | the larger of the two (at least `L/20`) |
+//! | `frequency` | the free edge's dominant frequencies, in octaves | counted only as far as both edges move (`L/20` fully) |
+//! | `drape` | the drape coefficients (the cloth's shadow beyond what is held) | 1 |
+//! | `strain` | the largest edge strain, averaged over time (runs on the same grid only) | the larger of the two (at least 0.02) |
 //!
-//! `D = shape + spread + ½ amplitude + ¼ frequency + ¼ strain`. Every term
+//! `D = shape + spread + ¼ amplitude + ¼ frequency + 2 drape + ¼ strain`. Every term
 //! is symmetric in the two runs, so `D(a, b) = D(b, a)`, and `D(a, a) = 0`.
 //!
 //! A target figure `F=V` adds `|F − V| / max(|V|, 0.001)`; a bound `F<=V`
@@ -30,7 +31,7 @@ use crate::record::Figures;
 use crate::scene::load::nearest;
 
 /// The weights of the reference distance's terms, in the order of [`Terms`].
-pub const WEIGHTS: [f64; 5] = [1.0, 1.0, 0.5, 0.25, 0.25];
+pub const WEIGHTS: [f64; 6] = [1.0, 1.0, 0.25, 0.25, 2.0, 0.25];
 
 /// The terms of the distance to a reference, each unweighted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -43,6 +44,8 @@ pub struct Terms {
     pub amplitude: f64,
     /// Free-edge frequency, in octaves (damped where the edge barely moves).
     pub frequency: f64,
+    /// Drape coefficient, absolute.
+    pub drape: f64,
     /// Mean strain, relative.
     pub strain: f64,
 }
@@ -55,6 +58,7 @@ impl Terms {
             self.spread,
             self.amplitude,
             self.frequency,
+            self.drape,
             self.strain,
         ];
         t.iter().zip(WEIGHTS).map(|(t, w)| t * w).sum()
@@ -92,19 +96,29 @@ pub fn between(a: &Features, b: &Features, length: f64) -> Terms {
         / n)
         .sqrt()
         / length;
-    let amplitude = relative(a.edge_amplitude, b.edge_amplitude, 0.01 * length);
-    let moving = (a.edge_amplitude.min(b.edge_amplitude) / (0.02 * length)).min(1.0);
+    // Amplitudes below L/20 (a cloth that hangs still, a settled drape's
+    // corners) are compared in absolute terms: their relative differences
+    // are noise.
+    let amplitude = relative(a.edge_amplitude, b.edge_amplitude, 0.05 * length);
+    let moving = (a.edge_amplitude.min(b.edge_amplitude) / (0.05 * length)).min(1.0);
     let frequency = if a.edge_frequency > 0.0 && b.edge_frequency > 0.0 {
-        (a.edge_frequency / b.edge_frequency).log2().abs() * moving
+        (a.edge_frequency.log2() - b.edge_frequency.log2()).abs() * moving
     } else {
         0.0
     };
-    let strain = relative(a.mean_strain, b.mean_strain, 0.005);
+    // An edge's strain depends on the edge's length (a finer grid resolves
+    // finer wrinkles), so it is compared only between runs on one grid.
+    let strain = if a.grid == b.grid {
+        relative(a.mean_strain, b.mean_strain, 0.02)
+    } else {
+        0.0
+    };
     Terms {
         shape,
         spread,
         amplitude,
         frequency,
+        drape: (a.drape_coefficient - b.drape_coefficient).abs(),
         strain,
     }
 }

@@ -89,6 +89,8 @@ impl Lattice {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Features {
+    /// The grid measured (particles along the weft and the warp).
+    pub grid: [u32; 2],
     /// Frames in the measured window.
     pub frames: u64,
     /// Whether every sampled position was finite.
@@ -274,7 +276,9 @@ impl Probe {
             .copied()
             .min_by(|&a, &b| x[a].z.total_cmp(&x[b].z))
             .map_or(0.0, |i| (self.start[i].z - x[i].z) as f64);
+        let spec = scene.solver().spec();
         let features = Features {
+            grid: [spec.weft, spec.warp],
             frames: self.frames,
             finite: self.finite,
             mean: mean.iter().map(|m| m.to_array()).collect(),
@@ -297,19 +301,60 @@ impl Probe {
     }
 }
 
+/// Runs `preset` for `seconds` of simulated time without telemetry and
+/// measures it at `lattice`, as a fit measures every run.
+pub fn measure(
+    preset: &crate::scene::Preset,
+    lattice: &Lattice,
+    seconds: f32,
+) -> Result<Features, MeasureError> {
+    let mut scene = Scene::new(preset).map_err(|e| MeasureError(e.to_string()))?;
+    let frames = scene.frames_in(seconds);
+    let mut probe = Probe::new(lattice.clone(), frames, &scene);
+    probe.frame(&scene);
+    for _ in 0..frames {
+        scene.step().map_err(|e| MeasureError(e.to_string()))?;
+        probe.frame(&scene);
+    }
+    Ok(probe.features(&scene))
+}
+
+/// A run that could not be set up or stepped to its end.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{0}")]
+pub struct MeasureError(String);
+
 /// The dominant frequency (Hz) of a trajectory sampled every `dt` seconds:
-/// the peak of the spectrum (Hann window, 0.05 Hz steps up to 15 Hz or the
-/// Nyquist frequency) of its motion along the direction it moves most.
+/// the centroid of the power spectrum of its motion along the direction it
+/// moves most (trend removed, Hann window, 0.05 Hz steps), between two
+/// cycles per window and 15 Hz (or the Nyquist frequency). A centroid,
+/// unlike the highest peak, does not jump between a gust's slow swing and
+/// the flapping when their peaks are close in height.
 pub fn dominant_frequency(track: &[DVec3], dt: f64) -> f64 {
     let n = track.len();
     if n < 8 || dt <= 0.0 {
         return 0.0;
     }
+    // The straight line from the first to the last sample's neighbourhood
+    // (least squares) is the trend: a drift, not a flap.
+    let t_mean = (n - 1) as f64 / 2.0;
     let mean = track.iter().sum::<DVec3>() / n as f64;
+    let var_t: f64 = (0..n).map(|k| (k as f64 - t_mean).powi(2)).sum();
+    let slope = track
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (*p - mean) * (k as f64 - t_mean))
+        .sum::<DVec3>()
+        / var_t;
+    let detrended: Vec<DVec3> = track
+        .iter()
+        .enumerate()
+        .map(|(k, p)| *p - mean - slope * (k as f64 - t_mean))
+        .collect();
     // The direction of largest variance: power iteration on the covariance.
     let mut c = [[0.0f64; 3]; 3];
-    for p in track {
-        let d = (*p - mean).to_array();
+    for d in &detrended {
+        let d = d.to_array();
         for (r, row) in c.iter_mut().enumerate() {
             for (s, v) in row.iter_mut().enumerate() {
                 *v += d[r] * d[s];
@@ -329,18 +374,23 @@ pub fn dominant_frequency(track: &[DVec3], dt: f64) -> f64 {
         }
         axis = next.normalize();
     }
-    let signal: Vec<f64> = track
+    let signal: Vec<f64> = detrended
         .iter()
         .enumerate()
-        .map(|(k, p)| {
+        .map(|(k, d)| {
             let hann = 0.5 - 0.5 * (std::f64::consts::TAU * k as f64 / (n - 1) as f64).cos();
-            (*p - mean).dot(axis) * hann
+            d.dot(axis) * hann
         })
         .collect();
+    let span = n as f64 * dt;
     let top = (0.5 / dt).min(15.0);
-    let (mut best, mut best_power) = (0.0, 0.0);
-    let mut f = 0.05;
-    while f <= top {
+    let (mut moment, mut total) = (0.0, 0.0);
+    let mut step = 0;
+    loop {
+        let f = 2.0 / span + 0.05 * step as f64;
+        if f > top {
+            break;
+        }
         let w = std::f64::consts::TAU * f * dt;
         let (mut re, mut im) = (0.0, 0.0);
         for (k, s) in signal.iter().enumerate() {
@@ -348,12 +398,11 @@ pub fn dominant_frequency(track: &[DVec3], dt: f64) -> f64 {
             im -= s * (w * k as f64).sin();
         }
         let power = re * re + im * im;
-        if power > best_power {
-            (best, best_power) = (f, power);
-        }
-        f += 0.05;
+        moment += f * power;
+        total += power;
+        step += 1;
     }
-    best
+    if total > 0.0 { moment / total } else { 0.0 }
 }
 
 /// The drape coefficient of the cloth as it is now (a Cusick drape tester:

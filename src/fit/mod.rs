@@ -533,8 +533,9 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
         path: r.run.path.clone(),
         why,
     };
-    let mut scene = Scene::new(preset).map_err(|e| failed(e.to_string()))?;
-    let frames = scene.frames_in(fit.seconds);
+    let frames = Scene::new(preset)
+        .map_err(|e| failed(e.to_string()))?
+        .frames_in(fit.seconds);
     let path = dir.join(REFERENCE);
     if let Ok(text) = std::fs::read_to_string(&path)
         && let Ok(c) = serde_json::from_str::<CachedReference>(&text)
@@ -544,17 +545,13 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
     {
         return Ok(Some(c.features));
     }
-    let mut probe = Probe::new(fit.lattice.clone(), frames, &scene);
-    probe.frame(&scene);
-    for _ in 0..frames {
-        scene.step().map_err(|e| failed(e.to_string()))?;
-        probe.frame(&scene);
-    }
+    let features =
+        measure::measure(preset, &fit.lattice, fit.seconds).map_err(|e| failed(e.to_string()))?;
     let cached = CachedReference {
         final_state: r.run.figures.final_state.clone(),
         frames,
         lattice: fit.lattice.clone(),
-        features: probe.features(&scene),
+        features,
     };
     let json = serde_json::to_string_pretty(&cached).expect("features serialize");
     write_atomically(&path, json.as_bytes())?;

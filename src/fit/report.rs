@@ -73,11 +73,12 @@ pub fn table(fit: &Fit, outcome: &Outcome) -> String {
         let term = |e: &Evaluated, f: fn(&super::Terms) -> f64| {
             e.distance.terms.as_ref().map_or("–".into(), |t| number(f(t)))
         };
-        let terms: [(&str, fn(&super::Terms) -> f64); 5] = [
+        let terms: [(&str, fn(&super::Terms) -> f64); 6] = [
             ("  shape (of L)", |t| t.shape),
             ("  spread (of L)", |t| t.spread),
             ("  edge amplitude (relative)", |t| t.amplitude),
             ("  edge frequency (octaves)", |t| t.frequency),
+            ("  drape coefficient", |t| t.drape),
             ("  mean strain (relative)", |t| t.strain),
         ];
         rows.push(vec![
