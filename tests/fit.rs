@@ -113,9 +113,35 @@ fn the_distance_is_zero_against_itself_and_symmetric() {
     })
     .unwrap();
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let outcome = weft::fit::run(&fit, &dir.path().join("fit"), None, 1, &stop, false, &mut |_| {})
-        .unwrap();
+    let outcome = weft::fit::run(
+        &fit,
+        &dir.path().join("fit"),
+        None,
+        1,
+        &stop,
+        false,
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(outcome.points.len(), 1);
+    // Run again: the reference's features are read from the cache, not measured again.
+    let cache = dir.path().join("fit/reference.json");
+    let written = std::fs::metadata(&cache).unwrap().modified().unwrap();
+    let again = weft::fit::run(
+        &fit,
+        &dir.path().join("fit"),
+        None,
+        1,
+        &stop,
+        false,
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(
+        std::fs::metadata(&cache).unwrap().modified().unwrap(),
+        written
+    );
+    assert_eq!(again.points[0].distance, outcome.points[0].distance);
     let start = &outcome.points[0];
     assert_eq!(
         start.distance.total, 0.0,
@@ -333,19 +359,39 @@ fn bad_fits_exit_2_naming_the_argument_before_running() {
             "--vary cloth.width: not a live key",
         ),
         (
-            vec!["--vary", "solver.weights.curvture=0.1..0.5", "--target", "sag=0.1"],
+            vec![
+                "--vary",
+                "solver.weights.curvture=0.1..0.5",
+                "--target",
+                "sag=0.1",
+            ],
             "did you mean `solver.weights.curvature`",
         ),
         (
-            vec!["--vary", "solver.weights.curvature=0.5..0.5", "--target", "sag=0.1"],
+            vec![
+                "--vary",
+                "solver.weights.curvature=0.5..0.5",
+                "--target",
+                "sag=0.1",
+            ],
             "the range is empty",
         ),
         (
-            vec!["--vary", "solver.weights.curvature=0.9..0.5", "--target", "sag=0.1"],
+            vec![
+                "--vary",
+                "solver.weights.curvature=0.9..0.5",
+                "--target",
+                "sag=0.1",
+            ],
             "the range is reversed",
         ),
         (
-            vec!["--vary", "solver.weights.curvature=0.5..3", "--target", "sag=0.1"],
+            vec![
+                "--vary",
+                "solver.weights.curvature=0.5..3",
+                "--target",
+                "sag=0.1",
+            ],
             "--vary solver.weights.curvature=0.5..3",
         ),
         (
@@ -369,7 +415,12 @@ fn bad_fits_exit_2_naming_the_argument_before_running() {
             "did you mean `drape_coefficient`",
         ),
         (
-            vec!["--vary", "solver.weights.curvature=0.1..0.5", "--to", &other],
+            vec![
+                "--vary",
+                "solver.weights.curvature=0.1..0.5",
+                "--to",
+                &other,
+            ],
             "a run of another scene",
         ),
         (

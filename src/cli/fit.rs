@@ -191,8 +191,13 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     }
     if args.status || shard.is_some() {
         eprintln!(
-            "the fit is complete ({} runs); run it without --shard for the report",
-            outcome.points.len()
+            "the fit is complete ({} runs){}",
+            outcome.points.len(),
+            if args.status {
+                ""
+            } else {
+                "; run it without --shard for the report"
+            }
         );
         return Ok(ExitCode::SUCCESS);
     }

@@ -78,11 +78,7 @@ pub fn between(a: &Features, b: &Features, length: f64) -> Terms {
         .mean
         .iter()
         .zip(&b.mean)
-        .map(|(p, q)| {
-            (0..3)
-                .map(|k| (p[k] - q[k]) * (p[k] - q[k]))
-                .sum::<f64>()
-        })
+        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]) * (p[k] - q[k])).sum::<f64>())
         .sum::<f64>()
         / n)
         .sqrt()
@@ -274,7 +270,11 @@ impl Target {
             Goal::AtMost => (value - self.value).max(0.0),
             Goal::AtLeast => (self.value - value).max(0.0),
         };
-        if off.is_nan() { f64::INFINITY } else { off / scale }
+        if off.is_nan() {
+            f64::INFINITY
+        } else {
+            off / scale
+        }
     }
 }
 
@@ -324,7 +324,10 @@ mod tests {
         assert_eq!(b.miss(0.05), 0.0);
         assert!(b.miss(0.2) > 0.0);
         let e = "drape_coeficient=0.4".parse::<Target>().unwrap_err();
-        assert!(e.to_string().contains("did you mean `drape_coefficient`"), "{e}");
+        assert!(
+            e.to_string().contains("did you mean `drape_coefficient`"),
+            "{e}"
+        );
         assert!("steps_per_second=3".parse::<Target>().is_err());
         assert!("max_strain=x".parse::<Target>().is_err());
         assert!("max_strain=0.1@0".parse::<Target>().is_err());

@@ -120,7 +120,10 @@ pub const MEASURED: [(&str, &str); 6] = [
         "drape_coefficient",
         "the Cusick test's drape coefficient at the last frame",
     ),
-    ("mean_drop", "how far the free particles' mean height fell (m)"),
+    (
+        "mean_drop",
+        "how far the free particles' mean height fell (m)",
+    ),
     (
         "sag",
         "how far the lowest free particle is below its start (m)",
@@ -412,7 +415,12 @@ pub fn dominant_frequency(track: &[DVec3], dt: f64) -> f64 {
 pub fn drape_coefficient(scene: &Scene) -> f64 {
     let spec = scene.solver().spec();
     let (dx, dy) = spec.spacing();
-    let pinned = scene.solver().masses().iter().filter(|m| **m == 0.0).count();
+    let pinned = scene
+        .solver()
+        .masses()
+        .iter()
+        .filter(|m| **m == 0.0)
+        .count();
     let disc = pinned as f64 * dx as f64 * dy as f64;
     let area = spec.width as f64 * spec.height as f64;
     if area - disc <= 0.0 {

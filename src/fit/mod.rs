@@ -482,7 +482,10 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), FitError> {
                 return Ok(());
             }
             let what = if old.weft != manifest.weft {
-                format!("written by weft {}, this is weft {}", old.weft, manifest.weft)
+                format!(
+                    "written by weft {}, this is weft {}",
+                    old.weft, manifest.weft
+                )
             } else if old.preset != manifest.preset || old.set != manifest.set {
                 "another preset or --set".into()
             } else if old.vary != manifest.vary {
@@ -517,7 +520,9 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), FitError> {
 struct CachedReference {
     final_state: String,
     frames: u64,
-    lattice: Lattice,
+    /// The lattice as JSON text: compared as text, since a float read back
+    /// from JSON may differ from the one written in its last bit.
+    lattice: String,
     features: Features,
 }
 
@@ -537,11 +542,12 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
         .map_err(|e| failed(e.to_string()))?
         .frames_in(fit.seconds);
     let path = dir.join(REFERENCE);
+    let lattice = serde_json::to_string(&fit.lattice).expect("a lattice serializes");
     if let Ok(text) = std::fs::read_to_string(&path)
         && let Ok(c) = serde_json::from_str::<CachedReference>(&text)
         && c.final_state == r.run.figures.final_state
         && c.frames == frames
-        && c.lattice == fit.lattice
+        && c.lattice == lattice
     {
         return Ok(Some(c.features));
     }
@@ -550,7 +556,7 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
     let cached = CachedReference {
         final_state: r.run.figures.final_state.clone(),
         frames,
-        lattice: fit.lattice.clone(),
+        lattice,
         features,
     };
     let json = serde_json::to_string_pretty(&cached).expect("features serialize");
@@ -691,7 +697,14 @@ impl Evaluator<'_> {
         }
         let texts: Vec<Vec<String>> = points
             .iter()
-            .map(|x| self.fit.vary.iter().zip(x).map(|(v, &x)| v.at(x).1).collect())
+            .map(|x| {
+                self.fit
+                    .vary
+                    .iter()
+                    .zip(x)
+                    .map(|(v, &x)| v.at(x).1)
+                    .collect()
+            })
             .collect();
         let mut new: Vec<usize> = Vec::new();
         for (k, t) in texts.iter().enumerate() {
@@ -826,8 +839,8 @@ impl Evaluator<'_> {
                 missing,
             }));
         }
-        let outcome = crate::sweep::run(&plan, &dir, self.shard, self.jobs, self.stop, |p| {
-            match p {
+        let outcome =
+            crate::sweep::run(&plan, &dir, self.shard, self.jobs, self.stop, |p| match p {
                 crate::sweep::Progress::Start { total, skipped } => {
                     self.tell(Progress::Generation {
                         generation,
@@ -840,8 +853,7 @@ impl Evaluator<'_> {
                     time: t,
                 }),
                 crate::sweep::Progress::Error(_) => {}
-            }
-        })?;
+            })?;
         if !outcome.errors.is_empty() {
             return Err(FitError::Points(outcome.errors));
         }

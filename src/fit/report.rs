@@ -71,15 +71,19 @@ pub fn table(fit: &Fit, outcome: &Outcome) -> String {
     }
     if reference.is_some() {
         let term = |e: &Evaluated, f: fn(&super::Terms) -> f64| {
-            e.distance.terms.as_ref().map_or("–".into(), |t| number(f(t)))
+            e.distance
+                .terms
+                .as_ref()
+                .map_or("–".into(), |t| number(f(t)))
         };
-        let terms: [(&str, fn(&super::Terms) -> f64); 6] = [
+        type Term = fn(&super::Terms) -> f64;
+        let terms: [(&str, Term); 6] = [
             ("  shape (of L)", |t| t.shape),
             ("  spread (of L)", |t| t.spread),
             ("  edge amplitude (relative)", |t| t.amplitude),
             ("  edge frequency (octaves)", |t| t.frequency),
             ("  drape coefficient", |t| t.drape),
-            ("  mean strain (relative)", |t| t.strain),
+            ("  mean strain (relative, same grid only)", |t| t.strain),
         ];
         rows.push(vec![
             "distance to the reference".into(),

@@ -63,7 +63,9 @@ pub enum VaryError {
         live: Vec<String>,
     },
     /// A key that needs a new scene (the cloth, bodies, colliders).
-    #[error("--vary {0}: not a live key (only the solver's settings and the wind change a running scene; a fit varies those: solver.*, environment.wind.*)")]
+    #[error(
+        "--vary {0}: not a live key (only the solver's settings and the wind change a running scene; a fit varies those: solver.*, environment.wind.*)"
+    )]
     NotLive(String),
     /// A key varied twice.
     #[error("--vary {0}: the key is varied twice")]
@@ -262,7 +264,10 @@ mod tests {
             })
         ));
         assert!(matches!("a=1".parse::<Vary>(), Err(VaryError::Form(_))));
-        assert!(matches!("a=x..1".parse::<Vary>(), Err(VaryError::End { .. })));
+        assert!(matches!(
+            "a=x..1".parse::<Vary>(),
+            Err(VaryError::End { .. })
+        ));
     }
 
     #[test]
@@ -272,9 +277,16 @@ mod tests {
         assert!(ok[0].integer);
         let mut typo = vec!["solver.weights.curvture=0.1..0.5".parse().unwrap()];
         let e = check("windy_flag", &[], &mut typo).unwrap_err();
-        assert!(e.to_string().contains("did you mean `solver.weights.curvature`"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("did you mean `solver.weights.curvature`"),
+            "{e}"
+        );
         let mut dead = vec!["cloth.width=1..2".parse().unwrap()];
-        assert!(matches!(check("windy_flag", &[], &mut dead), Err(VaryError::NotLive(_))));
+        assert!(matches!(
+            check("windy_flag", &[], &mut dead),
+            Err(VaryError::NotLive(_))
+        ));
         let mut wide = vec!["solver.weights.curvature=0.5..7".parse().unwrap()];
         let e = check("windy_flag", &[], &mut wide).unwrap_err();
         assert!(matches!(e, VaryError::Refused { .. }), "{e}");

@@ -80,9 +80,12 @@ pub trait Measure {
     fn finish(self: Box<Self>, scene: &Scene) -> serde_json::Value;
 }
 
+/// Makes a [`Measure`] for a point's scene.
+pub type MakeMeasure = dyn Fn(&Scene) -> Box<dyn Measure> + Send + Sync;
+
 /// Makes a fresh [`Measure`] for each point's scene.
 #[derive(Clone)]
-pub struct Measurement(pub Arc<dyn Fn(&Scene) -> Box<dyn Measure> + Send + Sync>);
+pub struct Measurement(pub Arc<MakeMeasure>);
 
 impl std::fmt::Debug for Measurement {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
