@@ -11,10 +11,10 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use weft::fit::distance::between;
-use weft::fit::measure::{Lattice, measure};
+use weft::fit::measure::{Lattice, measure, measure_with};
 use weft::fit::search::Method;
 use weft::fit::{Fit, Request};
-use weft::scene::{Override, Scene, load};
+use weft::scene::{Override, Scene, Tuning, load};
 
 mod common;
 use common::weft;
@@ -148,6 +148,11 @@ fn the_distance_is_zero_against_itself_and_symmetric() {
         "the preset against its own recording: {:?}",
         start.distance
     );
+    assert_eq!(
+        start.features.horizon,
+        Some(0.0),
+        "on the reference's grid, restarted from its states with its settings: no error"
+    );
 
     // Two different cloths: the same distance either way.
     let loaded = load::load(CUSICK, &[]).unwrap();
@@ -161,6 +166,15 @@ fn the_distance_is_zero_against_itself_and_symmetric() {
     );
     assert_eq!(ab, ba);
     assert!(ab.total() > 0.0);
+
+    // Restarted from the limp cloth's states, the stiff settings part from it.
+    let (_, horizon) = measure_with(&loaded.preset, &lattice, 0.5, true).unwrap();
+    let horizon = horizon.expect("shared states on the same grid");
+    assert_eq!(horizon.starts.len(), 4);
+    let same = horizon.error(&lattice, &Tuning::of(&loaded.preset));
+    let other = horizon.error(&lattice, &Tuning::of(&stiff.preset));
+    assert_eq!(same, Some(0.0));
+    assert!(other.is_some_and(|e| e > 0.0), "{other:?}");
 }
 
 /// The drape ladder of docs/method.md: against each reference rung, the

@@ -13,9 +13,11 @@
 //! | `frequency` | the free edge's dominant frequencies, in octaves | counted only as far as both edges move (`L/20` fully) |
 //! | `drape` | the drape coefficients (the cloth's shadow beyond what is held) | 1 |
 //! | `strain` | the largest edge strain, averaged over time (runs on the same grid only) | the larger of the two (at least 0.02) |
+//! | `horizon` | the candidate restarted from the reference's states, its RMS error after a short horizon (same grid only) | `L` |
 //!
-//! `D = shape + spread + ¼ amplitude + ¼ frequency + 2 drape + ¼ strain`. Every term
-//! is symmetric in the two runs, so `D(a, b) = D(b, a)`, and `D(a, a) = 0`.
+//! `D = shape + spread + ¼ amplitude + ¼ frequency + 2 drape + ¼ strain + horizon`.
+//! Every term but `horizon` is symmetric in the two runs, so
+//! `D(a, b) = D(b, a)` without it, and `D(a, a) = 0` with it.
 //!
 //! A target figure `F=V` adds `|F − V| / max(|V|, 0.001)`; a bound `F<=V`
 //! (or `F>=V`) adds the same only when it is crossed. Each target, and the
@@ -31,7 +33,7 @@ use crate::record::Figures;
 use crate::scene::load::nearest;
 
 /// The weights of the reference distance's terms, in the order of [`Terms`].
-pub const WEIGHTS: [f64; 6] = [1.0, 1.0, 0.25, 0.25, 2.0, 0.25];
+pub const WEIGHTS: [f64; 7] = [1.0, 1.0, 0.25, 0.25, 2.0, 0.25, 1.0];
 
 /// The terms of the distance to a reference, each unweighted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -48,6 +50,9 @@ pub struct Terms {
     pub drape: f64,
     /// Mean strain, relative.
     pub strain: f64,
+    /// Short-horizon error from the reference's states, in cloth lengths
+    /// (0 where there is none: another grid).
+    pub horizon: f64,
 }
 
 impl Terms {
@@ -60,6 +65,7 @@ impl Terms {
             self.frequency,
             self.drape,
             self.strain,
+            self.horizon,
         ];
         t.iter().zip(WEIGHTS).map(|(t, w)| t * w).sum()
     }
@@ -116,6 +122,7 @@ pub fn between(a: &Features, b: &Features, length: f64) -> Terms {
         frequency,
         drape: (a.drape_coefficient - b.drape_coefficient).abs(),
         strain,
+        horizon: 0.0,
     }
 }
 

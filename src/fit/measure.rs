@@ -112,6 +112,9 @@ pub struct Features {
     pub mean_drop: f64,
     /// How far the lowest free particle is below where it started (m).
     pub sag: f64,
+    /// The short-horizon error from the reference's shared states (in the
+    /// cloth's larger side), for a run on the reference's grid.
+    pub horizon: Option<f64>,
 }
 
 /// The figures [`Features`] carry, by name, with what each is.
@@ -165,6 +168,8 @@ pub struct Probe {
     strain: f64,
     frames: u64,
     finite: bool,
+    /// The reference's shared states, for a run on its grid.
+    horizon: Option<std::sync::Arc<Horizon>>,
 }
 
 impl Probe {
@@ -181,12 +186,19 @@ impl Probe {
             strain: 0.0,
             frames: 0,
             finite: true,
+            horizon: None,
             lattice,
         }
     }
 
+    /// Also measures the short-horizon error from the reference's shared states.
+    pub fn with_horizon(mut self, horizon: Option<std::sync::Arc<Horizon>>) -> Self {
+        self.horizon = horizon;
+        self
+    }
+
     /// The lattice points in the carrier's frame, at the scene's current frame.
-    fn sample(&self, scene: &Scene) -> Vec<DVec3> {
+    pub fn sample(&self, scene: &Scene) -> Vec<DVec3> {
         let spec = scene.solver().spec();
         let (n, m) = (spec.weft as usize, spec.warp as usize);
         let x = &scene.solver().state().position;
@@ -292,6 +304,10 @@ impl Probe {
             drape_coefficient: drape_coefficient(scene),
             mean_drop,
             sag,
+            horizon: self
+                .horizon
+                .as_ref()
+                .and_then(|h| h.error(&self.lattice, &scene.tuning())),
         };
         if features.mean.iter().flatten().all(|v| v.is_finite()) {
             features
@@ -311,15 +327,112 @@ pub fn measure(
     lattice: &Lattice,
     seconds: f32,
 ) -> Result<Features, MeasureError> {
+    Ok(measure_with(preset, lattice, seconds, false)?.0)
+}
+
+/// Starts of short horizons per run, and their length.
+pub const HORIZONS: u64 = 4;
+/// A short horizon, in seconds: shorter than the time two runs of a
+/// flapping flag take to part.
+pub const HORIZON_SECONDS: f32 = 0.25;
+
+/// A reference's shared states: its scene at [`HORIZONS`] frames spread
+/// over the measured window, and its lattice points (carrier's frame) a
+/// short horizon later. A candidate on the same grid restarts from each
+/// state with its own tuning, and its error after the horizon is measured.
+#[derive(Clone, Debug)]
+pub struct Horizon {
+    /// The reference at each start.
+    pub starts: Vec<Scene>,
+    /// The reference's lattice points a horizon after each start.
+    pub targets: Vec<Vec<DVec3>>,
+    /// The horizon, in frames.
+    pub frames: u64,
+}
+
+impl Horizon {
+    /// The RMS distance (in `L`) between where `tuning` takes each shared
+    /// state after the horizon and where the reference went, averaged over
+    /// the starts; [`HORIZON_FAILED`] if a restart fails; none for a tuning
+    /// of another frame length (its frames end at other times).
+    pub fn error(&self, lattice: &Lattice, tuning: &crate::scene::Tuning) -> Option<f64> {
+        let probe_of = |scene: &Scene| Probe::new(lattice.clone(), 0, scene);
+        if self
+            .starts
+            .first()
+            .is_some_and(|s| s.tuning().solver.dt != tuning.solver.dt)
+        {
+            return None;
+        }
+        let mut total = 0.0;
+        for (start, target) in self.starts.iter().zip(&self.targets) {
+            let mut scene = start.clone();
+            if scene.tuning() != *tuning && scene.set_tuning(tuning).is_err() {
+                return Some(HORIZON_FAILED);
+            }
+            for _ in 0..self.frames {
+                if scene.step().is_err() {
+                    return Some(HORIZON_FAILED);
+                }
+            }
+            let at = probe_of(&scene).sample(&scene);
+            let n = at.len().max(1) as f64;
+            total += (at
+                .iter()
+                .zip(target)
+                .map(|(p, q)| p.distance_squared(*q))
+                .sum::<f64>()
+                / n)
+                .sqrt()
+                / lattice.length;
+        }
+        Some(total / self.starts.len().max(1) as f64)
+    }
+}
+
+/// The short-horizon error of a restart that failed (a finite number, so
+/// that it is stored as one).
+pub const HORIZON_FAILED: f64 = 1e3;
+
+/// [`measure`], also keeping the run's shared states for short horizons
+/// when `horizon` is set.
+pub fn measure_with(
+    preset: &crate::scene::Preset,
+    lattice: &Lattice,
+    seconds: f32,
+    horizon: bool,
+) -> Result<(Features, Option<Horizon>), MeasureError> {
     let mut scene = Scene::new(preset).map_err(|e| MeasureError(e.to_string()))?;
     let frames = scene.frames_in(seconds);
     let mut probe = Probe::new(lattice.clone(), frames, &scene);
+    let length = scene.frames_in(HORIZON_SECONDS);
+    let settle = probe.settle;
+    // Starts spread over the window, each with a whole horizon after it.
+    let starts: Vec<u64> = (0..HORIZONS)
+        .map(|k| settle + k * frames.saturating_sub(settle + length) / HORIZONS)
+        .filter(|f| f + length <= frames)
+        .collect();
+    let mut kept = Horizon {
+        starts: Vec::new(),
+        targets: Vec::new(),
+        frames: length,
+    };
     probe.frame(&scene);
     for _ in 0..frames {
         scene.step().map_err(|e| MeasureError(e.to_string()))?;
         probe.frame(&scene);
+        if horizon {
+            let f = scene.frame();
+            if starts.contains(&f) {
+                kept.starts.push(scene.clone());
+            }
+            if starts.iter().any(|s| s + length == f) {
+                kept.targets.push(probe.sample(&scene));
+            }
+        }
     }
-    Ok(probe.features(&scene))
+    let keep = horizon && !kept.starts.is_empty() && kept.starts.len() == kept.targets.len();
+    Ok((probe.features(&scene), keep.then_some(kept)))
 }
 
 /// A run that could not be set up or stepped to its end.

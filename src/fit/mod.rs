@@ -47,7 +47,7 @@ use crate::sweep::grid::{MAX_NAME, Point, safe, short};
 use crate::sweep::shard::Shard;
 use crate::sweep::{Measure, Measurement, Plan, PointResult, SweepError, is_complete};
 use distance::{Target, Terms};
-use measure::{Features, Lattice, Probe};
+use measure::{Features, Horizon, Lattice, Probe};
 use search::{Evaluate, Method};
 use space::Vary;
 
@@ -348,7 +348,10 @@ impl Fit {
         figures: &Figures,
         reference: Option<&Features>,
     ) -> Distance {
-        let terms = reference.map(|r| distance::between(features, r, self.lattice.length));
+        let terms = reference.map(|r| Terms {
+            horizon: features.horizon.unwrap_or(0.0),
+            ..distance::between(features, r, self.lattice.length)
+        });
         let values: Vec<f64> = self
             .targets
             .iter()
@@ -528,10 +531,14 @@ struct CachedReference {
 
 /// The reference's features: re-runs its stored preset for the fit's
 /// simulated time (measured like every candidate), or reads them from
-/// `dir`'s cache.
-pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, FitError> {
+/// `dir`'s cache. On the fitted preset's grid, also its shared states for
+/// short horizons (a run of the reference, cached or not).
+pub fn reference_features(
+    fit: &Fit,
+    dir: &Path,
+) -> Result<(Option<Features>, Option<Arc<Horizon>>), FitError> {
     let Some(r) = &fit.reference else {
-        return Ok(None);
+        return Ok((None, None));
     };
     let preset = r.run.preset.as_ref().expect("checked in Fit::new");
     let failed = |why: String| FitError::ReferenceRun {
@@ -541,6 +548,8 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
     let frames = Scene::new(preset)
         .map_err(|e| failed(e.to_string()))?
         .frames_in(fit.seconds);
+    let same_grid = preset.cloth.weft == fit.start.preset.cloth.weft
+        && preset.cloth.warp == fit.start.preset.cloth.warp;
     let path = dir.join(REFERENCE);
     let lattice = serde_json::to_string(&fit.lattice).expect("a lattice serializes");
     if let Ok(text) = std::fs::read_to_string(&path)
@@ -549,10 +558,17 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
         && c.frames == frames
         && c.lattice == lattice
     {
-        return Ok(Some(c.features));
+        let horizon = if same_grid {
+            measure::measure_with(preset, &fit.lattice, fit.seconds, true)
+                .map_err(|e| failed(e.to_string()))?
+                .1
+        } else {
+            None
+        };
+        return Ok((Some(c.features), horizon.map(Arc::new)));
     }
-    let features =
-        measure::measure(preset, &fit.lattice, fit.seconds).map_err(|e| failed(e.to_string()))?;
+    let (features, horizon) = measure::measure_with(preset, &fit.lattice, fit.seconds, same_grid)
+        .map_err(|e| failed(e.to_string()))?;
     let cached = CachedReference {
         final_state: r.run.figures.final_state.clone(),
         frames,
@@ -566,7 +582,7 @@ pub fn reference_features(fit: &Fit, dir: &Path) -> Result<Option<Features>, Fit
     let text = std::fs::read_to_string(&path).map_err(file("reading", &path))?;
     let back: CachedReference =
         serde_json::from_str(&text).map_err(|e| failed(format!("{REFERENCE}: {e}")))?;
-    Ok(Some(back.features))
+    Ok((Some(back.features), horizon.map(Arc::new)))
 }
 
 /// One evaluated point.
@@ -679,6 +695,7 @@ struct Evaluator<'a> {
     stop: &'a AtomicBool,
     dry: bool,
     reference: Option<&'a Features>,
+    horizon: Option<Arc<Horizon>>,
     progress: Mutex<&'a mut (dyn FnMut(Progress) + Send)>,
     state: Mutex<State>,
 }
@@ -829,8 +846,10 @@ impl Evaluator<'_> {
             "off",
         )?;
         let (lattice, frames) = (self.fit.lattice.clone(), self.fit.frames);
+        let horizon = self.horizon.clone();
         plan.measurement = Some(Measurement(Arc::new(move |scene: &Scene| {
-            Box::new(Probe::new(lattice.clone(), frames, scene)) as Box<dyn Measure>
+            Box::new(Probe::new(lattice.clone(), frames, scene).with_horizon(horizon.clone()))
+                as Box<dyn Measure>
         })));
         if self.dry {
             let missing = list.iter().filter(|p| !is_complete(&dir, &p.name)).count();
@@ -904,7 +923,7 @@ pub fn run(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Outcome, FitError> {
     prepare(dir, &fit.manifest())?;
-    let reference = reference_features(fit, dir)?;
+    let (reference, horizon) = reference_features(fit, dir)?;
     let eval = Evaluator {
         fit,
         dir,
@@ -913,6 +932,7 @@ pub fn run(
         stop,
         dry,
         reference: reference.as_ref(),
+        horizon,
         progress: Mutex::new(progress),
         state: Mutex::new(State {
             generation: 0,

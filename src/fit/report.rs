@@ -77,13 +77,14 @@ pub fn table(fit: &Fit, outcome: &Outcome) -> String {
                 .map_or("–".into(), |t| number(f(t)))
         };
         type Term = fn(&super::Terms) -> f64;
-        let terms: [(&str, Term); 6] = [
+        let terms: [(&str, Term); 7] = [
             ("  shape (of L)", |t| t.shape),
             ("  spread (of L)", |t| t.spread),
             ("  edge amplitude (relative)", |t| t.amplitude),
             ("  edge frequency (octaves)", |t| t.frequency),
             ("  drape coefficient", |t| t.drape),
             ("  mean strain (relative, same grid only)", |t| t.strain),
+            ("  short horizon (of L, same grid only)", |t| t.horizon),
         ];
         rows.push(vec![
             "distance to the reference".into(),
