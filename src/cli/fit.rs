@@ -122,13 +122,15 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     bar.set_prefix(args.preset.clone());
     bar.set_message("best distance –");
     let where_ = shard.map(|s| format!(", shard {s}")).unwrap_or_default();
-    let mut done = 0u64;
+    // Runs with a distance, and runs of the current generation finished.
+    let (mut done, mut ran) = (0u64, 0u64);
     let mut progress = |p: Progress| match p {
         Progress::Generation {
             generation,
             run,
             done: skipped,
         } => {
+            ran = skipped as u64;
             if run > 0 {
                 bar.suspend(|| {
                     eprintln!(
@@ -142,9 +144,13 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
                 });
             }
         }
-        Progress::Ran { .. } => bar.set_position((done + 1).min(fit.budget as u64)),
+        Progress::Ran { .. } => {
+            ran += 1;
+            bar.set_position((done + ran).min(fit.budget as u64));
+        }
         Progress::Evaluated { index, best, .. } => {
             done = index as u64 + 1;
+            ran = 0;
             bar.set_position(done);
             bar.set_message(format!("best distance {best:.4}"));
         }
@@ -207,12 +213,12 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     let fitted = report::write_fitted(&fit, best, out_dir)?;
     let comparison = report::write_comparison(&fit, &outcome, out_dir, &table)?;
     eprintln!(
-        "fitted preset: {} (weft show {0}; weft gui {0})\ncomparison of the start, the fit{}: {} (rerun {2})",
+        "fitted preset: {} (weft show {0}; weft gui {0})\ncomparison of {}: {} (rerun {2})",
         fitted.display(),
         if fit.reference.is_some() {
-            " and the reference"
+            "the start, the fit and the reference"
         } else {
-            ""
+            "the start and the fit"
         },
         comparison.display()
     );

@@ -79,6 +79,14 @@ pub enum FitError {
     /// `--seconds` not positive.
     #[error("--seconds {0}: expected a positive number of seconds")]
     Seconds(f32),
+    /// The preset's scene cannot be built.
+    #[error("{preset}: {why}")]
+    Setup {
+        /// The preset.
+        preset: String,
+        /// Why.
+        why: String,
+    },
     /// `--to-weight` not positive.
     #[error("--to-weight {0}: expected a positive weight")]
     Weight(f64),
@@ -246,15 +254,15 @@ impl Fit {
         if !(req.reference_weight.is_finite() && req.reference_weight > 0.0) {
             return Err(FitError::Weight(req.reference_weight));
         }
+        let start = load::load(&req.preset, &req.base).map_err(Box::new)?;
         let mut vary = req.vary;
         space::check(&req.preset, &req.base, &mut vary)?;
-        let start = load::load(&req.preset, &req.base).map_err(Box::new)?;
         let seconds = req.seconds.unwrap_or(start.preset.duration);
         if !(seconds.is_finite() && seconds > 0.0) {
             return Err(FitError::Seconds(seconds));
         }
-        let scene = Scene::new(&start.preset).map_err(|e| FitError::ReferenceRun {
-            path: PathBuf::from(&req.preset),
+        let scene = Scene::new(&start.preset).map_err(|e| FitError::Setup {
+            preset: req.preset.clone(),
             why: e.to_string(),
         })?;
         let frames = scene.frames_in(seconds);

@@ -67,9 +67,22 @@ pub enum VaryError {
         "--vary {0}: not a live key (only the solver's settings and the wind change a running scene; a fit varies those: solver.*, environment.wind.*)"
     )]
     NotLive(String),
+    /// A live key whose value is not a number (`h = "auto"`, a vector).
+    #[error(
+        "--vary {key}: the preset's value is {value}, not a number; to vary it, give it a number first (--set {key}=…)"
+    )]
+    NotNumber {
+        /// The key.
+        key: String,
+        /// Its value.
+        value: String,
+    },
     /// A key varied twice.
     #[error("--vary {0}: the key is varied twice")]
     Twice(String),
+    /// The preset itself (with `--set`) does not load.
+    #[error(transparent)]
+    Base(Box<load::PresetError>),
     /// An end of the range that the preset refuses.
     #[error("--vary {key}={lo}..{hi}: {source}")]
     Refused {
@@ -197,16 +210,11 @@ pub fn live_numbers(preset: &Preset) -> BTreeMap<String, toml::Value> {
     out
 }
 
-/// Checks the varied keys against the preset (`base` overrides applied):
-/// each exists, holds a number, is live, is varied once, and both ends of
-/// its range load. Marks integer keys.
+/// Checks the varied keys against the preset (`base` overrides applied,
+/// which must load): each exists, holds a number, is live, is varied once,
+/// and both ends of its range load. Marks integer keys.
 pub fn check(preset: &str, base: &[Override], vary: &mut [Vary]) -> Result<(), VaryError> {
-    let loaded = load::load(preset, base).map_err(|source| VaryError::Refused {
-        key: vary.first().map(|v| v.key.clone()).unwrap_or_default(),
-        lo: vary.first().map_or(0.0, |v| v.lo),
-        hi: vary.first().map_or(0.0, |v| v.hi),
-        source: Box::new(source),
-    })?;
+    let loaded = load::load(preset, base).map_err(|source| VaryError::Base(Box::new(source)))?;
     let live = live_numbers(&loaded.preset);
     for k in 0..vary.len() {
         let key = vary[k].key.clone();
@@ -218,8 +226,14 @@ pub fn check(preset: &str, base: &[Override], vary: &mut [Vary]) -> Result<(), V
             let table = toml::Table::try_from(&loaded.preset).expect("a preset serializes");
             let mut flat = BTreeMap::new();
             flatten("", &toml::Value::Table(table), &mut flat);
-            if flat.contains_key(&key) && !Tuning::is_live(&key) {
-                return Err(VaryError::NotLive(key));
+            if let Some(value) = flat.get(&key) {
+                if !Tuning::is_live(&key) {
+                    return Err(VaryError::NotLive(key));
+                }
+                return Err(VaryError::NotNumber {
+                    key,
+                    value: value.clone(),
+                });
             }
             return Err(VaryError::NoKey {
                 hint: nearest(&key, live.keys().map(String::as_str)).map(str::to_string),
@@ -282,6 +296,14 @@ mod tests {
                 .contains("did you mean `solver.weights.curvature`"),
             "{e}"
         );
+        let mut auto = vec!["solver.h=0.001..0.01".parse().unwrap()];
+        assert!(matches!(
+            check("windy_flag", &[], &mut auto),
+            Err(VaryError::NotNumber { .. })
+        ));
+        let mut set = vec!["solver.h=0.001..0.01".parse().unwrap()];
+        let h = "solver.h=0.005".parse::<Override>().unwrap();
+        check("windy_flag", &[h], &mut set).unwrap();
         let mut dead = vec!["cloth.width=1..2".parse().unwrap()];
         assert!(matches!(
             check("windy_flag", &[], &mut dead),
