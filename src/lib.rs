@@ -8,6 +8,8 @@
 //!   bit-for-bit reproduction.
 //! - [`compare`], [`sweep`]: recorded runs side by side, and grids of runs
 //!   (also sharded over a batch engine's array jobs).
+//! - [`fit`]: the values of live keys that bring a preset closest to a
+//!   reference run or to target figures, searched on sweeps.
 //! - [`interrupt`]: Ctrl-C for long headless jobs (a clean stop, then a quit).
 //! - [`cli`]: the `weft` command line.
 //! - `app` (feature `viewer`, on by default): the desktop debugger, the Rerun
@@ -24,6 +26,7 @@
 pub mod app;
 pub mod cli;
 pub mod compare;
+pub mod fit;
 pub mod interrupt;
 pub mod record;
 pub mod replay;

@@ -560,7 +560,12 @@ fn bad_sweeps_exit_2_with_a_located_message_before_running() {
 fn docs_cluster_shows_the_scripts_ci_runs() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let doc = std::fs::read_to_string(root.join("docs/cluster.md")).unwrap();
-    for file in ["docs/cluster/sweep.sbatch", "docs/cluster/sweep-job.yaml"] {
+    for file in [
+        "docs/cluster/sweep.sbatch",
+        "docs/cluster/sweep-job.yaml",
+        "docs/cluster/fit.sbatch",
+        "docs/cluster/fit-driver",
+    ] {
         let text = std::fs::read_to_string(root.join(file)).unwrap();
         assert!(
             doc.contains(text.trim_end()),

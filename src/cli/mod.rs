@@ -1,7 +1,7 @@
 //! The `weft` command line: list, check, show, record and replay presets;
-//! compare runs and sweep grids. Each subcommand's options and output live
-//! here (`compare.rs`, `sweep.rs`); the libraries below (`compare`,
-//! `sweep`, `record`, …) print nothing. Output goes through [`output`].
+//! compare runs, sweep grids and fit weights. Each subcommand's options and output live
+//! here (`compare.rs`, `sweep.rs`, `fit.rs`); the libraries below (`compare`,
+//! `sweep`, `fit`, `record`, …) print nothing. Output goes through [`output`].
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -15,6 +15,7 @@ use crate::telemetry::{self, DEFAULT_VIEWER, Telemetry, blueprint};
 
 mod compare;
 mod failure;
+mod fit;
 pub mod output;
 mod sweep;
 
@@ -64,6 +65,8 @@ pub enum Command {
     Compare(compare::CompareArgs),
     /// Run a preset over a grid of settings (resumable, sharded on clusters), or collect one.
     Sweep(sweep::SweepArgs),
+    /// Search live keys for the values that bring a preset closest to a reference run or target figures.
+    Fit(fit::FitArgs),
 }
 
 /// Options of `weft gui`.
@@ -203,6 +206,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Record(args) => record(args),
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
+        Command::Fit(args) => fit::fit(args),
         Command::Replay { file } => {
             let r = crate::replay::replay(&file)?;
             if r.truncated {

@@ -182,12 +182,12 @@ pub struct Point {
 pub const MAX_NAME: usize = 200;
 
 /// The last segment of a key (`solver.weights.normality` → `normality`).
-fn short(key: &str) -> &str {
+pub fn short(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
 }
 
 /// Letters, digits and `.=+-` are kept, anything else becomes `_`.
-fn safe(text: &str) -> String {
+pub fn safe(text: &str) -> String {
     text.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || ".=+-".contains(c) {

@@ -22,6 +22,11 @@
 //! the solver is bit-identical for any thread count, the results do not
 //! depend on `--jobs`, on the order the points finish, or on the [`shard`]
 //! that ran them. [`collect`] reads a finished (or partial) sweep back.
+//!
+//! A plan need not be a grid: [`Plan::of_points`] takes any list of points
+//! (`weft fit` runs each generation of its search as one), and a plan's
+//! [`Measurement`] may watch every frame of every point and store what it
+//! measured in the point's `NAME.json` (`measured`).
 
 pub mod collect;
 pub mod grid;
@@ -29,7 +34,7 @@ pub mod shard;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
@@ -63,6 +68,29 @@ pub struct Plan {
     pub level: String,
     /// Every point, in order, loaded.
     pub points: Vec<(Point, Loaded)>,
+    /// What each point measures besides its figures, if anything.
+    pub measurement: Option<Measurement>,
+}
+
+/// Watches a point's run frame by frame and says what it measured.
+pub trait Measure {
+    /// Called after every frame (and once before the first, at frame 0).
+    fn frame(&mut self, scene: &Scene);
+    /// What was measured, stored as the point's `measured`.
+    fn finish(self: Box<Self>, scene: &Scene) -> serde_json::Value;
+}
+
+/// Makes a [`Measure`] for a point's scene.
+pub type MakeMeasure = dyn Fn(&Scene) -> Box<dyn Measure> + Send + Sync;
+
+/// Makes a fresh [`Measure`] for each point's scene.
+#[derive(Clone)]
+pub struct Measurement(pub Arc<MakeMeasure>);
+
+impl std::fmt::Debug for Measurement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Measurement")
+    }
 }
 
 /// The manifest, `sweep.json`.
@@ -117,6 +145,9 @@ pub struct PointResult {
     pub figures: Figures,
     /// The preset's `[expect]` bounds, checked.
     pub checks: Vec<Check>,
+    /// What the plan's [`Measurement`] measured, if it has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub measured: Option<serde_json::Value>,
 }
 
 impl PointResult {
@@ -149,12 +180,30 @@ impl Plan {
         {
             return Err(SweepError::Seconds(s));
         }
+        let mut plan = Self::of_points(preset, grid::points(&axes), frames, seconds, level)?;
+        plan.axes = axes;
+        Ok(plan)
+    }
+
+    /// A plan of the given points (not necessarily a grid), each validated.
+    pub fn of_points(
+        preset: &str,
+        list: Vec<Point>,
+        frames: Option<u64>,
+        seconds: Option<f32>,
+        level: &str,
+    ) -> Result<Self, SweepError> {
+        if let Some(s) = seconds
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(SweepError::Seconds(s));
+        }
         let level_set = Override {
             key: "telemetry.level".into(),
             value: toml::Value::String(level.into()),
         };
         let mut points = Vec::new();
-        for p in grid::points(&axes) {
+        for p in list {
             let mut sets = p.overrides.clone();
             sets.push(level_set.clone());
             let loaded = load::load(preset, &sets).map_err(|source| {
@@ -174,11 +223,12 @@ impl Plan {
         }
         Ok(Self {
             preset: preset.into(),
-            axes,
+            axes: Vec::new(),
             frames,
             seconds,
             level: level.into(),
             points,
+            measurement: None,
         })
     }
 
@@ -386,6 +436,8 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), SweepError> {
                     format!("preset {} instead of {}", old.preset, manifest.preset)
                 } else if old.axes != manifest.axes {
                     "other --set values".to_string()
+                } else if old.points != manifest.points {
+                    "other points".to_string()
                 } else {
                     "other frames, seconds or level".to_string()
                 };
@@ -441,17 +493,30 @@ pub fn run_point(
             source,
         })?;
     let telemetry = Telemetry::new(stream.clone(), loaded.preset.telemetry);
-    let never = AtomicBool::new(false);
     let run_error = |source| SweepError::Run {
         point: point.name.clone(),
         source: Box::new(source),
     };
     let mut run =
         Run::start(scene, telemetry, &plan.preset, &loaded.resolved).map_err(run_error)?;
-    let outcome = run.run(frames, &never, |_| {});
+    let mut measure = plan.measurement.as_ref().map(|m| (m.0)(&run.scene));
+    if let Some(m) = &mut measure {
+        m.frame(&run.scene);
+    }
+    let mut outcome = Ok(());
+    for _ in 0..frames {
+        outcome = run.step();
+        if outcome.is_err() {
+            break;
+        }
+        if let Some(m) = &mut measure {
+            m.frame(&run.scene);
+        }
+    }
     if let Err(e @ crate::record::RunError::Telemetry(_)) = outcome {
         return Err(run_error(e));
     }
+    let measured = measure.map(|m| m.finish(&run.scene));
     // `finish` flushes the file; only a complete one is renamed into place.
     let figures = run.finish().map_err(run_error)?;
     drop(stream);
@@ -463,6 +528,7 @@ pub fn run_point(
         settings: point.settings.clone(),
         figures,
         checks,
+        measured,
     };
     let json = serde_json::to_string_pretty(&result).expect("result serializes");
     write_atomically(&dir.join(format!("{}.json", point.name)), json.as_bytes())?;
