@@ -32,8 +32,9 @@ fn set(key: &str, value: f64) -> Override {
     }
 }
 
-/// A small drape fit: 1 s of the Cusick tester, curvature searched.
-fn drape_fit(out: &Path, extra: &[&str]) -> Output {
+/// The arguments of a small drape fit: 1 s of the Cusick tester, curvature
+/// searched, written to `out`.
+fn drape_args<'a>(out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "fit",
         CUSICK,
@@ -51,7 +52,12 @@ fn drape_fit(out: &Path, extra: &[&str]) -> Output {
         out.to_str().unwrap(),
     ];
     args.extend(extra);
-    weft().args(&args).output().unwrap()
+    args
+}
+
+/// Runs the small drape fit ([`drape_args`]).
+fn drape_fit(out: &Path, extra: &[&str]) -> Output {
+    weft().args(drape_args(out, extra)).output().unwrap()
 }
 
 /// Every point's settings and measurements (the figures without wall-clock
@@ -285,24 +291,7 @@ fn a_fit_is_the_same_across_threads_interruptions_and_shards() {
     // then resumed by the same command.
     let resumed = dir.path().join("resumed");
     let mut child = weft()
-        .args([
-            "fit",
-            CUSICK,
-            "--vary",
-            "solver.weights.curvature=0.5..0.95",
-            "--target",
-            "drape_coefficient=0.45",
-            "--seconds",
-            "1",
-            "--budget",
-            "10",
-            "--seed",
-            "7",
-            "--jobs",
-            "1",
-            "--out",
-            resumed.to_str().unwrap(),
-        ])
+        .args(drape_args(&resumed, &["--jobs", "1"]))
         .env("RAYON_NUM_THREADS", "1")
         .stderr(std::process::Stdio::null())
         .stdout(std::process::Stdio::null())
