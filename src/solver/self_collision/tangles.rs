@@ -86,7 +86,7 @@ pub const ON_PLANE: f32 = 1e-6;
 /// its two triangles) that leave particle `p` towards higher indices, then
 /// towards lower ones: every edge of the triangle mesh at `p`.
 #[inline]
-fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
+pub(super) fn edges_at(p: u32, spec: &ClothSpec) -> impl Iterator<Item = u32> {
     let (w, h) = (spec.weft, spec.warp);
     let (i, j) = (p % w, p / w);
     let (right, up, left, down) = (i + 1 < w, j + 1 < h, i > 0, j > 0);

@@ -269,23 +269,10 @@ pub(crate) struct EdgePair {
 }
 
 /// The mean displacement from `then` to `now`, every particle alike.
-fn mean_displacement(now: &[Vec3], then: &[Vec3]) -> Vec3 {
+pub(super) fn mean_displacement(now: &[Vec3], then: &[Vec3]) -> Vec3 {
     let mut sum = glam::DVec3::ZERO;
     for (a, b) in now.iter().zip(then) {
         sum += (*a - *b).as_dvec3();
     }
     (sum / now.len().max(1) as f64).as_vec3()
-}
-
-/// The edges particle `p` owns, towards higher indices, with their
-/// direction `k` (0 weft, 1 warp, 2 diagonal): every edge of the mesh is
-/// owned by its lower end.
-#[inline(always)]
-pub(super) fn owned_edges(p: u32, spec: &ClothSpec) -> impl Iterator<Item = (u8, u32)> {
-    let w = spec.weft;
-    let (i, j) = (p % w, p / w);
-    let (right, up) = (i + 1 < w, j + 1 < spec.warp);
-    [(right, 0u8, 1), (up, 1, w), (right && up, 2, w + 1)]
-        .into_iter()
-        .filter_map(move |(there, k, o)| there.then_some((k, p + o)))
 }

@@ -30,9 +30,10 @@
 use glam::Vec3;
 
 use super::distance::{closest_on_segments, point_triangle};
-use super::{EdgePair, owned_edges};
+use super::{EdgePair, mean_displacement};
 use crate::solver::cloth::ClothSpec;
 use crate::solver::self_collision::broad_phase::SpatialHash;
+use crate::solver::self_collision::tangles::edges_at;
 use crate::solver::team;
 
 /// The list's skin, in rest spacings: how far, twice over, the particles
@@ -155,11 +156,7 @@ impl NearPairs {
         if self.at.len() != x.len() || self.reach != reach {
             return false;
         }
-        let mut sum = glam::DVec3::ZERO;
-        for (a, b) in x.iter().zip(&self.at) {
-            sum += (*a - *b).as_dvec3();
-        }
-        let t = (sum / x.len().max(1) as f64).as_vec3();
+        let t = mean_displacement(x, &self.at);
         self.drift.clear();
         self.drift
             .extend(x.iter().zip(&self.at).map(|(a, b)| (*a - *b - t).length()));
@@ -229,7 +226,7 @@ impl NearPairs {
         // from the edge listed first.
         self.segments.clear();
         for p in 0..x.len() as u32 {
-            for (_, q) in owned_edges(p, spec) {
+            for q in edges_at(p, spec).filter(|&q| q > p) {
                 self.segments.push([p, q]);
             }
         }
