@@ -204,31 +204,40 @@ fn with_self_collision_on_the_diagnostics_count_agrees_with_brute_force() {
 }
 
 #[test]
-fn stress_jerk_with_self_collision_keeps_its_bounds_and_comes_apart() {
+fn stress_jerk_with_self_collision_keeps_its_bounds_and_comes_apart_within_half_a_second() {
     // Each teleport drags the cloth through itself. The tangled particles
-    // are left to the other families until the cloth is free of crossings
-    // again, so the contacts do not hold the tangle (which pulled the peak
-    // strain to 0.35), and the cloth comes apart before the next teleport.
+    // are left out of the contacts and bounds and moved so that the
+    // intersection contours shrink (docs/method.md §11b), until the cloth
+    // is free of crossings again; from then on the bounds keep it so.
     let p = preset("stress_jerk", &["solver.weights.self=1"]);
     let mut scene = Scene::new(&p).unwrap();
     let mut peak = 0.0f32;
-    // Teleports every 1.5 s (90 frames): in each stretch between two, a
-    // frame free of crossings (the solver's count, which the tests above
-    // check against brute force).
-    let mut free = [false; 6];
+    // Teleports every 1.5 s (90 frames): a crossing (the solver's count,
+    // which the tests above check against brute force) only in the half
+    // second after one.
+    let mut late = Vec::new();
+    let mut tangled = 0;
     for _ in 0..scene.frames_in(9.0) {
         scene.step().unwrap();
         let s = scene.solver();
         peak = peak.max(s.max_strain());
-        if s.self_crossings() == 0 {
-            free[(scene.frame() as usize - 1) / 90] = true;
+        let frame = scene.frame();
+        if s.self_crossings() > 0 {
+            tangled += 1;
+            if frame % 90 > 30 {
+                late.push(frame);
+            }
         }
     }
-    // The preset's bound, 0.2, is for its cloth without self-collision: the
-    // instant stop's peak is chaotic, and with the contacts it measured up
-    // to 0.246 (one frame, at the teleport 4.5 s in).
-    assert!(peak < 0.25, "peak strain {peak}");
-    assert_eq!(free, [true; 6], "stretches of 1.5 s that never came apart");
+    assert!(
+        tangled > 0,
+        "no teleport tangled the cloth: nothing was tested"
+    );
+    assert!(
+        late.is_empty(),
+        "crossings later than 0.5 s after a teleport: frames {late:?}"
+    );
+    assert!(peak < 0.2, "peak strain {peak}, the preset's bound 0.2");
 }
 
 /// The shipped presets other than `stress_jerk` (which teleports its cloth

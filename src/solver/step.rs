@@ -157,6 +157,7 @@ impl Solver {
         let bounded = self.self_collision_on();
         if bounded && self.self_contacts.leave_tangles_this_substep() {
             self.find_tangles();
+            self.untangle();
         }
         if bounded {
             self.find_offsets();

@@ -31,8 +31,9 @@
 //! sweeps; they are coloured like every other constraint set, so the
 //! threads share them bit-identically. After a jerk, for a second and then
 //! until none is found, particles of edges that cross a triangle
-//! (`SelfContacts::find_tangles`) are left out, so that a cloth dragged through itself comes apart instead of being
-//! held tangled. Friction between layers is the colliders' Coulomb model
+//! (`SelfContacts::find_tangles`) are left out and moved so that the curves
+//! along which the cloth passes through itself shrink (`untangle.rs`): a
+//! cloth dragged through itself comes apart instead of being held tangled. Friction between layers is the colliders' Coulomb model
 //! (`apply_friction`).
 //!
 //! The violation reported is the penetration `h − |(x_p − y) · n|` of the
@@ -53,13 +54,15 @@
 //! `broad_phase.rs`: the spatial hash and the near pairs it keeps.
 //! `pick.rs`: the contact search of a substep (`SelfContacts`).
 //! `tangles.rs`: the measures (penetration depths, crossings) and the
-//! tangles a jerk leaves. `offset/`: the offset bounds (`Offsets`).
+//! tangles a jerk leaves; `untangle.rs`: their pull apart. `offset/`: the
+//! offset bounds (`Offsets`).
 
 pub(crate) mod broad_phase;
 mod offset;
 mod pick;
 mod step;
 mod tangles;
+mod untangle;
 
 use glam::Vec3;
 

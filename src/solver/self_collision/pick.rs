@@ -208,6 +208,8 @@ pub(crate) struct SelfContacts {
     pub(super) leaving: bool,
     /// Whether tangles were found where they were last looked for.
     pub(super) tangles_left: bool,
+    /// The crossings found there.
+    pub(super) crossed: Vec<super::untangle::Crossing>,
 }
 
 /// The positions and orientations a contact search reads.
@@ -320,6 +322,7 @@ impl SelfContacts {
         self.set = Batched::default();
         self.near.clear();
         self.tangled.clear();
+        self.crossed.clear();
         self.watch = 0;
         self.leaving = false;
     }

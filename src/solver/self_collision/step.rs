@@ -3,6 +3,7 @@
 
 use glam::{DVec3, Vec3};
 
+use super::untangle::{STEP, untangle};
 use super::{EDGE_GAP, Layers};
 use crate::solver::collision::Pose;
 use crate::solver::{Attachment, Family, Solver};
@@ -22,6 +23,21 @@ impl Solver {
         crossings
     }
 
+    /// Moves the particles of the crossings [`Solver::find_tangles`] found
+    /// last so that the cloth comes apart (`untangle.rs`).
+    pub(in crate::solver) fn untangle(&mut self) {
+        let t = self.stopwatch();
+        let (dx, dy) = self.spec.spacing();
+        untangle(
+            &mut self.state.position,
+            &self.inv_mass,
+            &self.topology.triangles,
+            &self.self_contacts.crossed,
+            STEP * dx.min(dy),
+        );
+        self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
+    }
+
     /// Leaves tangles alone (self-collision's contacts skip the particles
     /// of edges that cross a triangle, looked for at every substep) for this
     /// step and the next [`JERK_WATCH`] if a body jerks its particles: if
@@ -30,7 +46,7 @@ impl Solver {
     /// jumps and stops; not a car that brakes, whose motion changes by
     /// millimetres a step). The cloth it drags through itself then comes
     /// apart instead of being held tangled by contacts that keep each
-    /// particle's side.
+    /// particle's side, helped by [`Solver::untangle`].
     pub(in crate::solver) fn watch_for_jerks(&mut self, bodies: &[Pose], origin: DVec3) {
         let (dx, dy) = self.spec.spacing();
         let limit = JERK as f64 * dx.min(dy) as f64;
@@ -49,9 +65,10 @@ impl Solver {
         if jerk {
             self.self_contacts
                 .watch_for_tangles((JERK_WATCH + 1) * self.params.substeps);
-            // Nor are the particles bounded meanwhile: held to their bounds,
-            // the free particles could not follow the jerked ones.
-            self.unbounded = (JERK_WATCH + 1) * self.params.substeps;
+            // Nor are the particles bounded for the first steps: held to
+            // their bounds, the free particles could not follow the jerked
+            // ones.
+            self.unbounded = JERK_UNBOUNDED * self.params.substeps;
         }
     }
 
@@ -180,3 +197,8 @@ const OFFSET_ROUNDS: u32 = 6;
 
 /// How many steps after a jerk self-collision leaves tangles alone.
 const JERK_WATCH: u32 = 60;
+
+/// How many steps, the jerk's included, the offset bounds are lifted for:
+/// the free particles follow the jerked ones, and are bounded again (but
+/// for the tangled ones) while the tangles are undone.
+const JERK_UNBOUNDED: u32 = 5;

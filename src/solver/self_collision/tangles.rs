@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use super::broad_phase::{GROUP, NearTriangles, SpatialHash};
+use super::untangle::Crossing;
 use super::{Foot, SelfContacts, Triangle, bounds};
 use crate::solver::cloth::ClothSpec;
 use crate::solver::topology::Topology;
@@ -161,15 +162,20 @@ impl SelfContacts {
         self.tangled.clear();
         self.tangled.resize(x.len(), false);
         let tangled = &mut self.tangled;
-        let mut points = Vec::new();
+        let crossed = &mut self.crossed;
+        crossed.clear();
         scan_crossings(x, triangles, spec, Some(&self.near), |edge, tri, at| {
-            points.push(at);
+            crossed.push(Crossing {
+                edge,
+                triangle: tri,
+                at,
+            });
             for k in edge.into_iter().chain(tri) {
                 tangled[k as usize] = true;
             }
         });
-        self.tangles_left = !points.is_empty();
-        points
+        self.tangles_left = !crossed.is_empty();
+        crossed.iter().map(|c| c.at).collect()
     }
 
     /// The tangled particles, while this substep leaves them out of the
@@ -220,7 +226,7 @@ fn crossing_cell(spec: &ClothSpec) -> f32 {
 /// checked against every triangle instead, so that one long edge does not
 /// grow every query to the whole cloth. The candidates come from `near`
 /// while its pairs cover that growth, else from a new hash.
-fn scan_crossings(
+pub(super) fn scan_crossings(
     x: &[Vec3],
     triangles: &[[u32; 3]],
     spec: &ClothSpec,
