@@ -7,13 +7,15 @@
 # frames with any crossing (the same in every run: the runs are
 # deterministic).
 #
-#   benches/self_collision.sh [WEFT] [RUNS] >> benches/results/MACHINE.csv
+#   benches/self_collision.sh [WEFT] [RUNS] [PRESET...] >> benches/results/MACHINE.csv
 #
-# WEFT defaults to the binary `cargo test` builds; RUNS to 5.
+# WEFT defaults to the binary `cargo test` builds; RUNS to 5; the presets to
+# every shipped one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 weft="${1:-${CARGO_TARGET_DIR:-target}/debug/weft}"
 runs="${2:-5}"
+shift $(($# < 2 ? $# : 2))
 commit="$(git rev-parse --short HEAD)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
@@ -25,7 +27,11 @@ median() {
   python3 -c "import statistics,sys; print(statistics.median(float(x) for x in sys.argv[1:]))" "$@"
 }
 
-for preset in $("$weft" presets | awk '{print $1}'); do
+presets=("$@")
+if [ ${#presets[@]} -eq 0 ]; then
+  mapfile -t presets < <("$weft" presets | awk '{print $1}')
+fi
+for preset in "${presets[@]}"; do
   declare -a off=() on=()
   for ((k = 0; k < runs; k++)); do
     for w in 0 1; do
