@@ -119,30 +119,24 @@ fn the_distance_is_zero_against_itself_and_symmetric() {
     })
     .unwrap();
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let outcome = weft::fit::run(
-        &fit,
-        &dir.path().join("fit"),
-        None,
-        1,
-        &stop,
-        false,
-        &mut |_| {},
-    )
-    .unwrap();
+    let run = || {
+        weft::fit::run(
+            &fit,
+            &dir.path().join("fit"),
+            None,
+            1,
+            &stop,
+            false,
+            &mut |_| {},
+        )
+        .unwrap()
+    };
+    let outcome = run();
     assert_eq!(outcome.points.len(), 1);
     // Run again: the reference's features are read from the cache, not measured again.
     let cache = dir.path().join("fit/reference.json");
     let written = std::fs::metadata(&cache).unwrap().modified().unwrap();
-    let again = weft::fit::run(
-        &fit,
-        &dir.path().join("fit"),
-        None,
-        1,
-        &stop,
-        false,
-        &mut |_| {},
-    )
-    .unwrap();
+    let again = run();
     assert_eq!(
         std::fs::metadata(&cache).unwrap().modified().unwrap(),
         written
