@@ -1,11 +1,11 @@
-//! Self-collision's broad phase: a spatial hash over particle positions
-//! (which particles lie near a box), and the particle–triangle pairs it
-//! finds, kept from substep to substep while the motion allows.
+//! Self-collision's broad phase: the particle–triangle pairs near enough
+//! to become contacts, kept from substep to substep while the motion
+//! allows ([`NearTriangles`], found by sorting the particles along an axis:
+//! `prune.rs`), and a spatial hash over particle positions (which particles
+//! lie near a box), which the crossing count uses.
 //!
-//! Space is cut into cubic cells of side `cell` (for the near pairs, a
-//! rest spacing plus twice the reach and skin, so that a triangle's grown
-//! box overlaps at most two cells along each axis; for the crossing count,
-//! a rest diagonal). Each particle goes into the cell of its
+//! The hash cuts space into cubic cells of side `cell` (for the crossing
+//! count, a rest diagonal). Each particle goes into the cell of its
 //! position; cells are hashed into `2^k ≥ 2N` buckets and the particles are
 //! counting-sorted by bucket, in index order within a bucket. Building is
 //! linear in the number of particles, and a query visits the cells its box
@@ -19,12 +19,13 @@
 //! hash.query(lo, hi, |p| { /* p's cell overlaps [lo, hi] */ });
 //! ```
 
+use super::prune::{SortedBoxes, widest_axis};
 use crate::solver::team;
 use glam::{IVec3, Vec3};
 
 /// Which particles lie near each triangle of a mesh: every particle inside
-/// the triangle's bounding box grown by `reach + skin`, found with a
-/// [`SpatialHash`] and then kept (a Verlet list) until the particles have
+/// the triangle's bounding box grown by `reach + skin`, found among the
+/// particles sorted along an axis ([`SortedBoxes`]) and then kept (a Verlet list) until the particles have
 /// moved too far for it to hold.
 ///
 /// **Why it holds.** A box test is a test per axis, so it does not change
@@ -50,7 +51,8 @@ use glam::{IVec3, Vec3};
 /// built from them does not depend on when the last search was.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct NearTriangles {
-    hash: SpatialHash,
+    /// The particles, sorted for a search.
+    points: SortedBoxes,
     /// Group `g`'s particles are `particles[start[g]..start[g + 1]]`.
     start: Vec<u32>,
     particles: Vec<u32>,
@@ -78,14 +80,12 @@ impl NearTriangles {
     /// Makes sure the pairs hold for positions `x`: keeps them if the last
     /// search had the same `reach` and `skin` and the particles have since
     /// moved apart by less than the skin (see the type), else searches
-    /// again. `spacing` is the mesh's longest rest edge along an axis (the
-    /// hash's cells are sized from it).
+    /// again.
     pub(crate) fn update(
         &mut self,
         x: &[Vec3],
         triangles: &[[u32; 3]],
         (reach, skin): (f32, f32),
-        spacing: f32,
         threads: usize,
     ) {
         let same =
@@ -93,7 +93,7 @@ impl NearTriangles {
         if same && self.holds(x) {
             return;
         }
-        self.search(x, triangles, (reach, skin), spacing, threads);
+        self.search(x, triangles, (reach, skin), threads);
     }
 
     /// The particles near the triangles of group `g` ([`group`]), in
@@ -143,16 +143,13 @@ impl NearTriangles {
         x: &[Vec3],
         triangles: &[[u32; 3]],
         (reach, skin): (f32, f32),
-        spacing: f32,
         threads: usize,
     ) {
         let grow = Vec3::splat(reach + skin);
-        // Cells a triangle's box (a cell's diagonal, grown) fits in two of
-        // along each axis.
-        self.hash.build(x, spacing + 2.0 * (reach + skin));
+        self.points.build(widest_axis(x), x.iter().map(|&p| (p, p)));
         // Each thread searches its share of the groups; the shares, joined
         // in order, are what one thread would find alone.
-        let hash = &self.hash;
+        let points = &self.points;
         let shares = team::run(threads, |crew| {
             let (mut particles, mut ends) = (Vec::new(), Vec::new());
             for g in crew.share(groups(triangles.len())) {
@@ -164,7 +161,7 @@ impl NearTriangles {
                 let (lo, hi) = (lo - grow, hi + grow);
                 let shared = |p: u32| tris.iter().all(|t| t.contains(&p));
                 let from = particles.len();
-                hash.query(lo, hi, |p| {
+                points.within(lo, hi, |p| {
                     let xp = x[p as usize];
                     if xp.cmpge(lo).all() && xp.cmple(hi).all() && !shared(p) {
                         particles.push(p);
@@ -348,21 +345,21 @@ mod tests {
         let (reach, skin) = (0.03, 0.1);
         let (x0, tris) = sheet(|p| p);
         let mut near = NearTriangles::default();
-        near.update(&x0, &tris, (reach, skin), 0.1, 1);
+        near.update(&x0, &tris, (reach, skin), 1);
         // Carried far (a car's flag): the same pairs, no new search.
         let (x1, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0));
-        near.update(&x1, &tris, (reach, skin), 0.1, 1);
+        near.update(&x1, &tris, (reach, skin), 1);
         assert_eq!(near.searches(), 1);
         // Bent a little more than the skin allows: searched again. Bent a
         // little less: kept. Either way every particle in a box grown by the
         // reach is among the kept pairs, in ascending order.
         for (bend, searches) in [(0.04, 1), (0.2, 2)] {
             let (x, _) = sheet(|p| p + Vec3::new(40.0, -3.0, 7.0 + bend * p.x * p.x));
-            near.update(&x, &tris, (reach, skin), 0.1, 2);
+            near.update(&x, &tris, (reach, skin), 2);
             assert_eq!(near.searches(), searches, "bend {bend}");
             // Two threads search exactly what one does.
             let mut alone = NearTriangles::default();
-            alone.update(&x, &tris, (reach, skin), 0.1, 1);
+            alone.update(&x, &tris, (reach, skin), 1);
             if searches == 2 {
                 assert_eq!(
                     (&alone.start, &alone.particles),

@@ -60,6 +60,7 @@
 pub(crate) mod broad_phase;
 mod offset;
 mod pick;
+mod prune;
 mod step;
 mod tangles;
 mod untangle;

@@ -248,13 +248,8 @@ impl SelfContacts {
         let now = layers.now;
         let (dx, dy) = spec.spacing();
         let triangles = &mesh.triangles;
-        self.near.update(
-            now,
-            triangles,
-            (reach, SKIN * dx.min(dy)),
-            dx.max(dy),
-            threads,
-        );
+        self.near
+            .update(now, triangles, (reach, SKIN * dx.min(dy)), threads);
         // The threads check blocks of triangle groups; the blocks' finds,
         // joined in order, are what one thread would find alone.
         let this = &*self;

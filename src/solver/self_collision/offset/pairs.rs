@@ -19,26 +19,35 @@
 //!   primitive comes nearer than `1/√2` of a spacing to one it shares no
 //!   particle with).
 //!
-//! The search tests bounding spheres before distances. A particle nearer
-//! than `ρ = r + skin` to a triangle is within `ρ` and the triangle's
-//! radius of its centroid; two edges nearer than `ρ` have midpoints within
-//! `ρ` and both half-lengths. A spatial hash of the particles (then of the
-//! edges' midpoints) gives the candidates; the threads search contiguous
-//! blocks of triangles (then edges), joined in block order, so the list
-//! does not depend on the number of threads.
+//! The search tests boxes and bounding spheres before distances. A
+//! particle nearer than `ρ = r + skin` to a triangle is inside the
+//! triangle's box grown by `ρ`, and within `ρ` and the triangle's radius of
+//! its centroid; two edges nearer than `ρ` have boxes that overlap when
+//! each is grown by `ρ/2`, and midpoints within `ρ` and both half-lengths.
+//! The particles, and the edges' boxes, sorted along the axis the cloth
+//! spreads farthest along (`prune.rs`), give the candidates; their
+//! distances are measured eight at a time, each bit for bit the distance
+//! measured alone (`distance.rs`). The threads search contiguous blocks of
+//! triangles (then of sorted edges), joined in block order, and which
+//! pairs are near depends on the positions alone, so the list does not
+//! depend on the number of threads.
 
 use glam::Vec3;
 
-use super::distance::{closest_on_segments, point_triangle};
+use super::distance::{closest_on_segments, point_triangle_distances, segment_distances};
 use super::{EdgePair, mean_displacement};
 use crate::solver::cloth::ClothSpec;
-use crate::solver::self_collision::broad_phase::SpatialHash;
+use crate::solver::self_collision::prune::{SortedBoxes, widest_axis};
 use crate::solver::self_collision::tangles::edges_at;
 use crate::solver::team;
 
 /// The list's skin, in rest spacings: how far, twice over, the particles
 /// may drift beyond their mean motion before the list is searched again.
 const SKIN: f32 = 1.0;
+
+/// How much, in parts of the reach, the boxes of a search are grown beyond
+/// it: room for rounding, so that no pair nearer than the reach is missed.
+const BOX_SLACK: f32 = 1e-4;
 
 /// Triangles (and edges) a thread searches at a time.
 const BLOCK: usize = 64;
@@ -49,13 +58,15 @@ const PARALLEL_MIN: usize = 256;
 /// The near pairs, and where they were found.
 #[derive(Clone, Debug, Default)]
 pub(super) struct NearPairs {
-    hash: SpatialHash,
+    /// The particles, and the edges' boxes, sorted for a search.
+    points: SortedBoxes,
+    boxes: SortedBoxes,
     /// Particle against triangle: `(particle, triangle)` and their
     /// distance at the search.
     faces: Vec<(u32, u32, f32)>,
-    /// Edge against edge, sharing no particle, and their distance at the
-    /// search.
-    edges: Vec<([u32; 2], [u32; 2], f32)>,
+    /// Edge against edge (their indices in `segments`), sharing no
+    /// particle, and their distance at the search.
+    edges: Vec<(u32, u32, f32)>,
     /// The positions of the last search; empty: none yet.
     at: Vec<Vec3>,
     /// The radius and skin of the last search.
@@ -68,7 +79,12 @@ pub(super) struct NearPairs {
     spheres: Vec<(Vec3, f32)>,
     segments: Vec<[u32; 2]>,
     middles: Vec<(Vec3, f32)>,
-    points: Vec<Vec3>,
+    /// Scratch for [`NearPairs::nearest`]: each triangle's and edge's
+    /// largest drift among its corners; the pairs to measure.
+    tri_drift: Vec<f32>,
+    seg_drift: Vec<f32>,
+    near: Vec<[u32; 2]>,
+    near_faces: Vec<(u32, u32)>,
 }
 
 /// What [`NearPairs::nearest`] finds.
@@ -106,43 +122,71 @@ impl NearPairs {
         if !self.holds(x, (r, skin)) && !self.search(x, triangles, spec, (r, skin)) {
             return false;
         }
+        // Each primitive's largest drift among its corners.
         let drift = &self.drift;
         let most = |ids: &[u32]| ids.iter().fold(0.0f32, |m, &k| m.max(drift[k as usize]));
-        for &(p, t, d) in &self.faces {
-            let tri = triangles[t as usize];
-            if d - drift[p as usize] - most(&tri) >= r {
-                continue;
-            }
-            let d = point_triangle(x[p as usize], tri.map(|k| x[k as usize]));
+        self.tri_drift.clear();
+        self.tri_drift.extend(triangles.iter().map(|t| most(t)));
+        self.seg_drift.clear();
+        self.seg_drift.extend(self.segments.iter().map(|e| most(e)));
+        let lower = |k: u32, d: f32, nearest: &mut [f32]| {
+            let m = &mut nearest[k as usize];
+            *m = m.min(d);
+        };
+        let tri_drift = &self.tri_drift;
+        self.near_faces.clear();
+        self.near_faces.extend(
+            self.faces
+                .iter()
+                .filter(|&&(p, t, d)| d - drift[p as usize] - tri_drift[t as usize] < r)
+                .map(|&(p, t, _)| (p, t)),
+        );
+        for_each_face_distance(x, triangles, &self.near_faces, |p, t, d| {
             if d < r {
-                for k in std::iter::once(p).chain(tri) {
-                    let m = &mut out.nearest[k as usize];
-                    *m = m.min(d);
+                for k in std::iter::once(p).chain(triangles[t as usize]) {
+                    lower(k, d, out.nearest);
                 }
             }
-        }
-        for &(e, f, d) in &self.edges {
-            if d - most(&e) - most(&f) >= r {
-                continue;
+        });
+        // The edge pairs that may have come nearer than `r`, their
+        // distances eight at a time.
+        let seg_drift = &self.seg_drift;
+        self.near.clear();
+        self.near.extend(
+            self.edges
+                .iter()
+                .filter(|&&(i, j, d)| d - seg_drift[i as usize] - seg_drift[j as usize] < r)
+                .map(|&(i, j, _)| [i, j]),
+        );
+        let segments = &self.segments;
+        let mut ends = [[Vec3::ZERO; 4]; 8];
+        for eight in self.near.chunks(8) {
+            for (k, lane) in ends.iter_mut().enumerate() {
+                let [i, j] = eight[k.min(eight.len() - 1)];
+                let (e, f) = (segments[i as usize], segments[j as usize]);
+                *lane = [e[0], e[1], f[0], f[1]].map(|q| x[q as usize]);
             }
-            let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
-            let (d, se, sf) = closest_on_segments(u, v, a, b);
-            if d >= r {
-                continue;
-            }
-            for k in e.into_iter().chain(f) {
-                let m = &mut out.nearest[k as usize];
-                *m = m.min(d);
-            }
-            if d < out.keep && d > 0.0 {
-                let normal = ((u + (v - u) * se) - (a + (b - a) * sf)) / d;
-                if normal.is_finite() {
-                    out.pairs.push(EdgePair {
-                        e,
-                        f,
-                        at: [se, sf],
-                        normal,
-                    });
+            let d = segment_distances(&ends);
+            for (&[i, j], &d) in eight.iter().zip(&d) {
+                if d >= r {
+                    continue;
+                }
+                let (e, f) = (segments[i as usize], segments[j as usize]);
+                for k in e.into_iter().chain(f) {
+                    lower(k, d, out.nearest);
+                }
+                if d < out.keep && d > 0.0 {
+                    let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
+                    let (d, se, sf) = closest_on_segments(u, v, a, b);
+                    let normal = ((u + (v - u) * se) - (a + (b - a) * sf)) / d;
+                    if normal.is_finite() {
+                        out.pairs.push(EdgePair {
+                            e,
+                            f,
+                            at: [se, sf],
+                            normal,
+                        });
+                    }
                 }
             }
         }
@@ -180,8 +224,10 @@ impl NearPairs {
             return false;
         }
         let reach = r + skin;
+        let axis = widest_axis(x);
         // Particle against triangle: the particles within `reach` of a
-        // triangle's bounding sphere (about its centroid), then by distance.
+        // triangle's box, and of its bounding sphere (about its centroid),
+        // then by distance.
         self.spheres.clear();
         self.spheres.extend(triangles.iter().map(|t| {
             let c = t.map(|k| x[k as usize]);
@@ -189,41 +235,44 @@ impl NearPairs {
             let radius = c.iter().fold(0.0f32, |m, &v| m.max(v.distance(centre)));
             (centre, radius)
         }));
-        let widest = self.spheres.iter().fold(0.0f32, |m, s| m.max(s.1));
-        self.hash.build(x, reach + widest);
+        self.points.build(axis, x.iter().map(|&p| (p, p)));
         let threads = if triangles.len() >= PARALLEL_MIN {
             team::available()
         } else {
             1
         };
-        let (hash, spheres) = (&self.hash, &self.spheres);
+        // A box test is exact per axis up to rounding: grown a little more,
+        // it keeps every pair nearer than `reach`.
+        let grow = reach * (1.0 + BOX_SLACK);
+        let (points, spheres) = (&self.points, &self.spheres);
         let blocks = team::run_blocks(threads, triangles.len(), BLOCK, |range| {
-            let mut found = Vec::new();
+            let mut near = Vec::new();
             for t in range {
                 let (tri, (centre, radius)) = (triangles[t], spheres[t]);
-                let near = reach + radius;
+                let near_enough = reach + radius;
                 let c = tri.map(|k| x[k as usize]);
-                hash.query(
-                    centre - Vec3::splat(near),
-                    centre + Vec3::splat(near),
-                    |p| {
-                        let xp = x[p as usize];
-                        if xp.distance_squared(centre) >= near * near || tri.contains(&p) {
-                            return;
-                        }
-                        let d = point_triangle(xp, c);
-                        if d < reach {
-                            found.push((p, t as u32, d));
-                        }
-                    },
-                );
+                let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
+                points.within(lo - Vec3::splat(grow), hi + Vec3::splat(grow), |p| {
+                    let xp = x[p as usize];
+                    if xp.distance_squared(centre) < near_enough * near_enough && !tri.contains(&p)
+                    {
+                        near.push((p, t as u32));
+                    }
+                });
             }
+            let mut found = Vec::new();
+            for_each_face_distance(x, triangles, &near, |p, t, d| {
+                if d < reach {
+                    found.push((p, t, d));
+                }
+            });
             found
         });
         self.faces.extend(blocks.into_iter().flatten());
-        // Edge against edge: the edges whose midpoints are nearer than
-        // `reach` and both half-lengths, then by distance; each pair once,
-        // from the edge listed first.
+        // Edge against edge: the edges whose boxes, each grown by half of
+        // `reach`, overlap, and whose midpoints are nearer than `reach` and
+        // both half-lengths; then by distance. Each pair once, the edge
+        // listed first as `e`.
         self.segments.clear();
         for p in 0..x.len() as u32 {
             for q in edges_at(p, spec).filter(|&q| q > p) {
@@ -235,38 +284,45 @@ impl NearPairs {
             let (u, v) = (x[e[0] as usize], x[e[1] as usize]);
             (0.5 * (u + v), 0.5 * u.distance(v))
         }));
-        let longest = self.middles.iter().fold(0.0f32, |m, s| m.max(s.1));
-        self.points.clear();
-        self.points.extend(self.middles.iter().map(|m| m.0));
-        // Cells of half the widest query: fewer edges visited than with
-        // cells that hold a query, for a few more (mostly empty) cells.
-        self.hash.build(&self.points, 0.5 * (reach + 2.0 * longest));
-        let (hash, segments, middles) = (&self.hash, &self.segments, &self.middles);
-        let blocks = team::run_blocks(threads, segments.len(), BLOCK, |range| {
-            let mut found = Vec::new();
-            for i in range {
-                let (e, (m, half)) = (segments[i], middles[i]);
+        let half = Vec3::splat(0.5 * grow);
+        self.boxes.build(
+            axis,
+            self.segments.iter().map(|e| {
                 let (u, v) = (x[e[0] as usize], x[e[1] as usize]);
-                let grow = Vec3::splat(reach + half + longest);
-                hash.query(m - grow, m + grow, |j| {
-                    if j as usize <= i {
-                        return;
-                    }
-                    let f = segments[j as usize];
-                    let (n, other) = middles[j as usize];
-                    let near = reach + half + other;
-                    if m.distance_squared(n) >= near * near
-                        || f.contains(&e[0])
-                        || f.contains(&e[1])
-                    {
-                        return;
-                    }
-                    let (a, b) = (x[f[0] as usize], x[f[1] as usize]);
-                    let d = closest_on_segments(u, v, a, b).0;
+                (u.min(v) - half, u.max(v) + half)
+            }),
+        );
+        let (boxes, segments, middles) = (&self.boxes, &self.segments, &self.middles);
+        let blocks = team::run_blocks(threads, boxes.len(), BLOCK, |range| {
+            let mut near = Vec::new();
+            boxes.overlapping(range, |i, j| {
+                let (i, j) = (i.min(j) as usize, i.max(j) as usize);
+                let (e, f) = (segments[i], segments[j]);
+                let ((m, a), (n, b)) = (middles[i], middles[j]);
+                let near_enough = reach + a + b;
+                if m.distance_squared(n) < near_enough * near_enough
+                    && !f.contains(&e[0])
+                    && !f.contains(&e[1])
+                {
+                    near.push((i as u32, j as u32));
+                }
+            });
+            // Their distances eight at a time (the last lanes of the last
+            // eight repeat its first pair).
+            let mut found = Vec::new();
+            let mut ends = [[Vec3::ZERO; 4]; 8];
+            for eight in near.chunks(8) {
+                for (k, lane) in ends.iter_mut().enumerate() {
+                    let (i, j) = eight[k.min(eight.len() - 1)];
+                    let (e, f) = (segments[i as usize], segments[j as usize]);
+                    *lane = [e[0], e[1], f[0], f[1]].map(|q| x[q as usize]);
+                }
+                let d = segment_distances(&ends);
+                for (&(i, j), &d) in eight.iter().zip(&d) {
                     if d < reach {
-                        found.push((e, f, d));
+                        found.push((i, j, d));
                     }
-                });
+                }
             }
             found
         });
@@ -276,5 +332,27 @@ impl NearPairs {
         self.drift.clear();
         self.drift.resize(x.len(), 0.0);
         true
+    }
+}
+
+/// Calls `f(p, t, d)` with the distance `d` of particle `p` from triangle
+/// `t` for every pair of `pairs`, in order, measured eight at a time.
+fn for_each_face_distance(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    pairs: &[(u32, u32)],
+    mut f: impl FnMut(u32, u32, f32),
+) {
+    let mut lanes = [[Vec3::ZERO; 4]; 8];
+    for eight in pairs.chunks(8) {
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            let (p, t) = eight[k.min(eight.len() - 1)];
+            let [a, b, c] = triangles[t as usize];
+            *lane = [p, a, b, c].map(|q| x[q as usize]);
+        }
+        let d = point_triangle_distances(&lanes);
+        for (&(p, t), &d) in eight.iter().zip(&d) {
+            f(p, t, d);
+        }
     }
 }
