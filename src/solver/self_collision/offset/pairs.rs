@@ -19,11 +19,10 @@
 //!   primitive comes nearer than `1/√2` of a spacing to one it shares no
 //!   particle with).
 //!
-//! The search tests boxes and bounding spheres before distances. A
-//! particle nearer than `ρ = r + skin` to a triangle is inside the
-//! triangle's box grown by `ρ`, and within `ρ` and the triangle's radius of
-//! its centroid; two edges nearer than `ρ` have boxes that overlap when
-//! each is grown by `ρ/2`, and midpoints within `ρ` and both half-lengths.
+//! The search tests boxes before distances: a particle nearer than
+//! `ρ = r + skin` to a triangle is inside the triangle's box grown by `ρ`,
+//! and two edges nearer than `ρ` have boxes that overlap when each is grown
+//! by `ρ/2`.
 //! The particles, and the edges' boxes, sorted along the axis the cloth
 //! spreads farthest along (`prune.rs`), give the candidates; their
 //! distances are measured eight at a time, each bit for bit the distance
@@ -73,12 +72,8 @@ pub(super) struct NearPairs {
     reach: (f32, f32),
     /// Scratch: each particle's drift since the search.
     drift: Vec<f32>,
-    /// Scratch for a search: each triangle's centroid and the radius about
-    /// it that holds its corners; the edges, their midpoints and
-    /// half-lengths.
-    spheres: Vec<(Vec3, f32)>,
+    /// The mesh's edges, in the order the list refers to them by.
     segments: Vec<[u32; 2]>,
-    middles: Vec<(Vec3, f32)>,
     /// Scratch for [`NearPairs::nearest`]: each triangle's and edge's
     /// largest drift among its corners; the pairs to measure.
     tri_drift: Vec<f32>,
@@ -226,15 +221,7 @@ impl NearPairs {
         let reach = r + skin;
         let axis = widest_axis(x);
         // Particle against triangle: the particles within `reach` of a
-        // triangle's box, and of its bounding sphere (about its centroid),
-        // then by distance.
-        self.spheres.clear();
-        self.spheres.extend(triangles.iter().map(|t| {
-            let c = t.map(|k| x[k as usize]);
-            let centre = (c[0] + c[1] + c[2]) / 3.0;
-            let radius = c.iter().fold(0.0f32, |m, &v| m.max(v.distance(centre)));
-            (centre, radius)
-        }));
+        // triangle's box, then by distance.
         self.points.build(axis, x.iter().map(|&p| (p, p)));
         let threads = if triangles.len() >= PARALLEL_MIN {
             team::available()
@@ -244,18 +231,15 @@ impl NearPairs {
         // A box test is exact per axis up to rounding: grown a little more,
         // it keeps every pair nearer than `reach`.
         let grow = reach * (1.0 + BOX_SLACK);
-        let (points, spheres) = (&self.points, &self.spheres);
+        let points = &self.points;
         let blocks = team::run_blocks(threads, triangles.len(), BLOCK, |range| {
             let mut near = Vec::new();
             for t in range {
-                let (tri, (centre, radius)) = (triangles[t], spheres[t]);
-                let near_enough = reach + radius;
+                let tri = triangles[t];
                 let c = tri.map(|k| x[k as usize]);
                 let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
                 points.within(lo - Vec3::splat(grow), hi + Vec3::splat(grow), |p| {
-                    let xp = x[p as usize];
-                    if xp.distance_squared(centre) < near_enough * near_enough && !tri.contains(&p)
-                    {
+                    if !tri.contains(&p) {
                         near.push((p, t as u32));
                     }
                 });
@@ -270,8 +254,7 @@ impl NearPairs {
         });
         self.faces.extend(blocks.into_iter().flatten());
         // Edge against edge: the edges whose boxes, each grown by half of
-        // `reach`, overlap, and whose midpoints are nearer than `reach` and
-        // both half-lengths; then by distance. Each pair once, the edge
+        // `reach`, overlap, then by distance. Each pair once, the edge
         // listed first as `e`.
         self.segments.clear();
         for p in 0..x.len() as u32 {
@@ -279,11 +262,6 @@ impl NearPairs {
                 self.segments.push([p, q]);
             }
         }
-        self.middles.clear();
-        self.middles.extend(self.segments.iter().map(|e| {
-            let (u, v) = (x[e[0] as usize], x[e[1] as usize]);
-            (0.5 * (u + v), 0.5 * u.distance(v))
-        }));
         let half = Vec3::splat(0.5 * grow);
         self.boxes.build(
             axis,
@@ -292,23 +270,13 @@ impl NearPairs {
                 (u.min(v) - half, u.max(v) + half)
             }),
         );
-        let (boxes, segments, middles) = (&self.boxes, &self.segments, &self.middles);
+        let (boxes, segments) = (&self.boxes, &self.segments);
         let blocks = team::run_blocks(threads, boxes.len(), BLOCK, |range| {
             let mut near = Vec::new();
-            boxes.overlapping(range, |i, j| {
-                let (i, j) = (i.min(j) as usize, i.max(j) as usize);
-                let (e, f) = (segments[i], segments[j]);
-                let ((m, a), (n, b)) = (middles[i], middles[j]);
-                let near_enough = reach + a + b;
-                if m.distance_squared(n) < near_enough * near_enough
-                    && !f.contains(&e[0])
-                    && !f.contains(&e[1])
-                {
-                    near.push((i as u32, j as u32));
-                }
-            });
+            boxes.overlapping(range, |i, j| near.push((i.min(j), i.max(j))));
             // Their distances eight at a time (the last lanes of the last
-            // eight repeat its first pair).
+            // eight repeat its last pair); edges that share a particle are
+            // dropped after.
             let mut found = Vec::new();
             let mut ends = [[Vec3::ZERO; 4]; 8];
             for eight in near.chunks(8) {
@@ -319,7 +287,8 @@ impl NearPairs {
                 }
                 let d = segment_distances(&ends);
                 for (&(i, j), &d) in eight.iter().zip(&d) {
-                    if d < reach {
+                    let (e, f) = (segments[i as usize], segments[j as usize]);
+                    if d < reach && !f.contains(&e[0]) && !f.contains(&e[1]) {
                         found.push((i, j, d));
                     }
                 }
