@@ -127,19 +127,9 @@ type Lanes = wide::f32x8;
 /// bit for bit the one-at-a-time distance.
 #[inline]
 pub(super) fn segment_distances(ends: &[[Vec3; 4]; 8]) -> [f32; 8] {
-    // Lane k of coordinate j of end i.
-    let mut v = [[[0.0f32; 8]; 3]; 4];
-    for (k, lane) in ends.iter().enumerate() {
-        for (i, end) in lane.iter().enumerate() {
-            v[i][0][k] = end.x;
-            v[i][1][k] = end.y;
-            v[i][2][k] = end.z;
-        }
-    }
-    let lanes = |i: usize| v[i].map(Lanes::new);
     let sub = |a: [Lanes; 3], b: [Lanes; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: [Lanes; 3], b: [Lanes; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let (p1, q1, p2, q2) = (lanes(0), lanes(1), lanes(2), lanes(3));
+    let [p1, q1, p2, q2] = in_lanes(ends);
     let (d1, d2, r) = (sub(q1, p1), sub(q2, p2), sub(p1, p2));
     let (a, e, f) = (dot(d1, d1), dot(d2, d2), dot(d2, r));
     let (c, b) = (dot(d1, r), dot(d1, d2));
@@ -179,21 +169,12 @@ pub(super) fn segment_distances(ends: &[[Vec3; 4]; 8]) -> [f32; 8] {
 #[inline]
 pub(super) fn point_triangle_distances(pt: &[[Vec3; 4]; 8]) -> [f32; 8] {
     type V = [Lanes; 3];
-    let mut v = [[[0.0f32; 8]; 3]; 4];
-    for (k, lane) in pt.iter().enumerate() {
-        for (i, end) in lane.iter().enumerate() {
-            v[i][0][k] = end.x;
-            v[i][1][k] = end.y;
-            v[i][2][k] = end.z;
-        }
-    }
-    let lanes = |i: usize| v[i].map(Lanes::new);
     let sub = |a: V, b: V| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: V, b: V| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let along = |a: V, d: V, s: Lanes| [a[0] + d[0] * s, a[1] + d[1] * s, a[2] + d[2] * s];
     let length = |a: V| dot(a, a).sqrt();
     let (zero, one) = (Lanes::ZERO, Lanes::ONE);
-    let (p, a, b, c) = (lanes(0), lanes(1), lanes(2), lanes(3));
+    let [p, a, b, c] = in_lanes(pt);
     let (ab, ac, ap) = (sub(b, a), sub(c, a), sub(p, a));
     let (d1, d2) = (dot(ab, ap), dot(ac, ap));
     let bp = sub(p, b);
@@ -241,6 +222,21 @@ pub(super) fn point_triangle_distances(pt: &[[Vec3; 4]; 8]) -> [f32; 8] {
         d = region.select(distance, d);
     }
     d.to_array()
+}
+
+/// Eight sets of four points as four points of eight lanes: point `i` of
+/// set `k` is lane `k` of the `i`-th.
+#[inline(always)]
+fn in_lanes(sets: &[[Vec3; 4]; 8]) -> [[Lanes; 3]; 4] {
+    let mut v = [[[0.0f32; 8]; 3]; 4];
+    for (k, set) in sets.iter().enumerate() {
+        for (i, point) in set.iter().enumerate() {
+            v[i][0][k] = point.x;
+            v[i][1][k] = point.y;
+            v[i][2][k] = point.z;
+        }
+    }
+    v.map(|point| point.map(Lanes::new))
 }
 
 /// [`segment_point`] in lanes.
@@ -295,31 +291,37 @@ mod tests {
         }
     }
 
-    #[test]
-    fn eight_points_and_triangles_at_a_time_are_one_at_a_time_bit_for_bit() {
-        let mut seed = 4242u32;
+    /// Checks `lanes` against `one`, lane by lane, bit for bit, over rounds
+    /// of eight sets of four points on a coarse lattice (so that parallel,
+    /// touching, crossing and on-plane cases come up often); every fifth
+    /// round, point `k` repeats point `copy(k)` where that is given (a
+    /// degenerate segment or triangle).
+    fn lanes_match_one_at_a_time(
+        seed: u32,
+        copy: impl Fn(usize) -> Option<usize>,
+        lanes: impl Fn(&[[Vec3; 4]; 8]) -> [f32; 8],
+        one: impl Fn([Vec3; 4]) -> f32,
+    ) {
+        let mut seed = seed;
         let mut rnd = || {
             seed ^= seed << 13;
             seed ^= seed >> 17;
             seed ^= seed << 5;
             (seed % 9) as f32 * 0.25 - 1.0
         };
-        // Coarse coordinates: every region, and degenerate triangles
-        // (a corner repeated) every fifth round.
         for round in 0..600 {
             let mut v = [[Vec3::ZERO; 4]; 8];
             for lane in &mut v {
                 for k in 0..4 {
-                    lane[k] = if round % 5 == 0 && k == 3 {
-                        lane[2]
-                    } else {
-                        Vec3::new(rnd(), rnd(), rnd())
+                    lane[k] = match copy(k) {
+                        Some(j) if round % 5 == 0 => lane[j],
+                        _ => Vec3::new(rnd(), rnd(), rnd()),
                     };
                 }
             }
-            let d = point_triangle_distances(&v);
-            for (lane, &[p, a, b, c]) in v.iter().enumerate() {
-                let one = point_triangle(p, [a, b, c]);
+            let d = lanes(&v);
+            for (lane, &points) in v.iter().enumerate() {
+                let one = one(points);
                 assert_eq!(
                     d[lane].to_bits(),
                     one.to_bits(),
@@ -330,36 +332,22 @@ mod tests {
     }
 
     #[test]
+    fn eight_points_and_triangles_at_a_time_are_one_at_a_time_bit_for_bit() {
+        lanes_match_one_at_a_time(
+            4242,
+            |k| (k == 3).then_some(2),
+            point_triangle_distances,
+            |[p, a, b, c]| point_triangle(p, [a, b, c]),
+        );
+    }
+
+    #[test]
     fn eight_at_a_time_is_one_at_a_time_bit_for_bit() {
-        let mut seed = 777u32;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            (seed % 9) as f32 * 0.25 - 1.0
-        };
-        // Coarse coordinates: parallel, touching, crossing and point-like
-        // segments come up often.
-        for round in 0..400 {
-            let mut v = [[Vec3::ZERO; 4]; 8];
-            for lane in &mut v {
-                for k in 0..4 {
-                    lane[k] = if round % 5 == 0 && k % 2 == 1 {
-                        lane[k - 1] // a point
-                    } else {
-                        Vec3::new(rnd(), rnd(), rnd())
-                    };
-                }
-            }
-            let d = segment_distances(&v);
-            for (lane, &[p1, q1, p2, q2]) in v.iter().enumerate() {
-                let one = closest_on_segments(p1, q1, p2, q2).0;
-                assert_eq!(
-                    d[lane].to_bits(),
-                    one.to_bits(),
-                    "round {round} lane {lane}"
-                );
-            }
-        }
+        lanes_match_one_at_a_time(
+            777,
+            |k| (k % 2 == 1).then(|| k - 1),
+            segment_distances,
+            |[p1, q1, p2, q2]| closest_on_segments(p1, q1, p2, q2).0,
+        );
     }
 }
