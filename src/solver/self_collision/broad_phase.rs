@@ -25,8 +25,8 @@ use glam::{IVec3, Vec3};
 
 /// Which particles lie near each triangle of a mesh: every particle inside
 /// the triangle's bounding box grown by `reach + skin`, found among the
-/// particles sorted along an axis ([`SortedBoxes`]) and then kept (a Verlet list) until the particles have
-/// moved too far for it to hold.
+/// particles sorted along an axis ([`SortedBoxes`]) and then kept (a Verlet
+/// list) until the particles have moved too far for it to hold.
 ///
 /// **Why it holds.** A box test is a test per axis, so it does not change
 /// when every particle moves by the same vector. Let `δ` be how far, per
