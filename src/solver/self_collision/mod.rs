@@ -33,7 +33,8 @@
 //! until none is found, particles of edges that cross a triangle
 //! (`SelfContacts::find_tangles`) are left out and moved so that the curves
 //! along which the cloth passes through itself shrink (`untangle.rs`): a
-//! cloth dragged through itself comes apart instead of being held tangled. Friction between layers is the colliders' Coulomb model
+//! cloth dragged through itself comes apart instead of being held tangled.
+//! Friction between layers is the colliders' Coulomb model
 //! (`apply_friction`).
 //!
 //! The violation reported is the penetration `h − |(x_p − y) · n|` of the
@@ -51,7 +52,9 @@
 //!
 //! Here: the contact, its projection and friction; the family that
 //! projects the contacts is [`families::self_collision`](super::families::self_collision).
-//! `broad_phase.rs`: the spatial hash and the near pairs it keeps.
+//! `broad_phase.rs`: the contacts' near pairs, and the spatial hash the
+//! crossing count uses. `prune.rs`: boxes sorted along an axis, to find
+//! which overlap (the near pairs' searches).
 //! `pick.rs`: the contact search of a substep (`SelfContacts`).
 //! `tangles.rs`: the measures (penetration depths, crossings) and the
 //! tangles a jerk leaves; `untangle.rs`: their pull apart. `offset/`: the

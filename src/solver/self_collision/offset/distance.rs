@@ -125,7 +125,7 @@ type Lanes = wide::f32x8;
 /// `ends[k]` is `p1 q1 p2 q2` of pair `k`. The same arithmetic in the same
 /// order, every case computed and the lane's own chosen, so each lane is
 /// bit for bit the one-at-a-time distance.
-#[inline]
+#[inline(always)]
 pub(super) fn segment_distances(ends: &[[Vec3; 4]; 8]) -> [f32; 8] {
     let sub = |a: [Lanes; 3], b: [Lanes; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: [Lanes; 3], b: [Lanes; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -166,7 +166,7 @@ pub(super) fn segment_distances(ends: &[[Vec3; 4]; 8]) -> [f32; 8] {
 /// one-at-a-time arithmetic, and each lane takes the first region whose
 /// test it passes, in the same order: bit for bit the one-at-a-time
 /// distance.
-#[inline]
+#[inline(always)]
 pub(super) fn point_triangle_distances(pt: &[[Vec3; 4]; 8]) -> [f32; 8] {
     type V = [Lanes; 3];
     let sub = |a: V, b: V| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -236,7 +236,15 @@ fn in_lanes(sets: &[[Vec3; 4]; 8]) -> [[Lanes; 3]; 4] {
             v[i][2][k] = point.z;
         }
     }
-    v.map(|point| point.map(Lanes::new))
+    // Spelled out: a nested `map` is left as a call, not inlined.
+    let point = |i: usize| {
+        [
+            Lanes::new(v[i][0]),
+            Lanes::new(v[i][1]),
+            Lanes::new(v[i][2]),
+        ]
+    };
+    [point(0), point(1), point(2), point(3)]
 }
 
 /// [`segment_point`] in lanes.

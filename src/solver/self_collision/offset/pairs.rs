@@ -78,8 +78,8 @@ pub(super) struct NearPairs {
     /// largest drift among its corners; the pairs to measure.
     tri_drift: Vec<f32>,
     seg_drift: Vec<f32>,
-    near: Vec<[u32; 2]>,
     near_faces: Vec<(u32, u32)>,
+    near_edges: Vec<(u32, u32)>,
 }
 
 /// What [`NearPairs::nearest`] finds.
@@ -146,45 +146,36 @@ impl NearPairs {
         // The edge pairs that may have come nearer than `r`, their
         // distances eight at a time.
         let seg_drift = &self.seg_drift;
-        self.near.clear();
-        self.near.extend(
+        self.near_edges.clear();
+        self.near_edges.extend(
             self.edges
                 .iter()
                 .filter(|&&(i, j, d)| d - seg_drift[i as usize] - seg_drift[j as usize] < r)
-                .map(|&(i, j, _)| [i, j]),
+                .map(|&(i, j, _)| (i, j)),
         );
         let segments = &self.segments;
-        let mut ends = [[Vec3::ZERO; 4]; 8];
-        for eight in self.near.chunks(8) {
-            for (k, lane) in ends.iter_mut().enumerate() {
-                let [i, j] = eight[k.min(eight.len() - 1)];
-                let (e, f) = (segments[i as usize], segments[j as usize]);
-                *lane = [e[0], e[1], f[0], f[1]].map(|q| x[q as usize]);
+        for_each_edge_distance(x, segments, &self.near_edges, |i, j, d| {
+            if d >= r {
+                return;
             }
-            let d = segment_distances(&ends);
-            for (&[i, j], &d) in eight.iter().zip(&d) {
-                if d >= r {
-                    continue;
-                }
-                let (e, f) = (segments[i as usize], segments[j as usize]);
-                for k in e.into_iter().chain(f) {
-                    lower(k, d, out.nearest);
-                }
-                if d < out.keep && d > 0.0 {
-                    let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
-                    let (d, se, sf) = closest_on_segments(u, v, a, b);
-                    let normal = ((u + (v - u) * se) - (a + (b - a) * sf)) / d;
-                    if normal.is_finite() {
-                        out.pairs.push(EdgePair {
-                            e,
-                            f,
-                            at: [se, sf],
-                            normal,
-                        });
-                    }
+            let (e, f) = (segments[i as usize], segments[j as usize]);
+            for k in e.into_iter().chain(f) {
+                lower(k, d, out.nearest);
+            }
+            if d < out.keep && d > 0.0 {
+                let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| x[k as usize]);
+                let (d, se, sf) = closest_on_segments(u, v, a, b);
+                let normal = ((u + (v - u) * se) - (a + (b - a) * sf)) / d;
+                if normal.is_finite() {
+                    out.pairs.push(EdgePair {
+                        e,
+                        f,
+                        at: [se, sf],
+                        normal,
+                    });
                 }
             }
-        }
+        });
         true
     }
 
@@ -274,25 +265,15 @@ impl NearPairs {
         let blocks = team::run_blocks(threads, boxes.len(), BLOCK, |range| {
             let mut near = Vec::new();
             boxes.overlapping(range, |i, j| near.push((i.min(j), i.max(j))));
-            // Their distances eight at a time (the last lanes of the last
-            // eight repeat its last pair); edges that share a particle are
-            // dropped after.
+            // Their distances eight at a time; edges that share a particle
+            // are dropped after.
             let mut found = Vec::new();
-            let mut ends = [[Vec3::ZERO; 4]; 8];
-            for eight in near.chunks(8) {
-                for (k, lane) in ends.iter_mut().enumerate() {
-                    let (i, j) = eight[k.min(eight.len() - 1)];
-                    let (e, f) = (segments[i as usize], segments[j as usize]);
-                    *lane = [e[0], e[1], f[0], f[1]].map(|q| x[q as usize]);
+            for_each_edge_distance(x, segments, &near, |i, j, d| {
+                let (e, f) = (segments[i as usize], segments[j as usize]);
+                if d < reach && !f.contains(&e[0]) && !f.contains(&e[1]) {
+                    found.push((i, j, d));
                 }
-                let d = segment_distances(&ends);
-                for (&(i, j), &d) in eight.iter().zip(&d) {
-                    let (e, f) = (segments[i as usize], segments[j as usize]);
-                    if d < reach && !f.contains(&e[0]) && !f.contains(&e[1]) {
-                        found.push((i, j, d));
-                    }
-                }
-            }
+            });
             found
         });
         self.edges.extend(blocks.into_iter().flatten());
@@ -304,8 +285,32 @@ impl NearPairs {
     }
 }
 
+/// Calls `f(i, j, d)` with the distance `d` between edges `segments[i]`
+/// and `segments[j]` for every pair of `pairs`, in order, measured eight at
+/// a time (the last eight padded with its last pair, not reported).
+fn for_each_edge_distance(
+    x: &[Vec3],
+    segments: &[[u32; 2]],
+    pairs: &[(u32, u32)],
+    mut f: impl FnMut(u32, u32, f32),
+) {
+    let mut lanes = [[Vec3::ZERO; 4]; 8];
+    for eight in pairs.chunks(8) {
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            let (i, j) = eight[k.min(eight.len() - 1)];
+            let (e, g) = (segments[i as usize], segments[j as usize]);
+            *lane = [e[0], e[1], g[0], g[1]].map(|q| x[q as usize]);
+        }
+        let d = segment_distances(&lanes);
+        for (&(i, j), &d) in eight.iter().zip(&d) {
+            f(i, j, d);
+        }
+    }
+}
+
 /// Calls `f(p, t, d)` with the distance `d` of particle `p` from triangle
-/// `t` for every pair of `pairs`, in order, measured eight at a time.
+/// `t` for every pair of `pairs`, in order, measured eight at a time (the
+/// last eight padded as for edges).
 fn for_each_face_distance(
     x: &[Vec3],
     triangles: &[[u32; 3]],
