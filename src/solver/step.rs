@@ -160,7 +160,7 @@ impl Solver {
             self.untangle();
         }
         if bounded {
-            self.find_offsets();
+            self.begin_offsets();
         }
         let t = self.stopwatch();
         let threads = self.threads();

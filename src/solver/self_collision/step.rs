@@ -54,14 +54,17 @@ impl Solver {
         let at = |poses: &[Pose], origin: DVec3, a: &Attachment| {
             origin + poses[a.body].compose(&a.local).translation.as_dvec3()
         };
-        let jerk = self.attachments.iter().any(|a| {
-            let (before, from, to) = (
-                at(&self.bodies_before, self.origin_before, a),
-                at(&self.bodies, self.frame.origin, a),
-                at(bodies, origin, a),
-            );
-            !((to - from) - (from - before)).length().le(&limit)
-        });
+        // At the first step the cloth starts with its carriers' motion
+        // (`start_with_carriers`): there is no earlier step to jerk from.
+        let jerk = self.steps > 0
+            && self.attachments.iter().any(|a| {
+                let (before, from, to) = (
+                    at(&self.bodies_before, self.origin_before, a),
+                    at(&self.bodies, self.frame.origin, a),
+                    at(bodies, origin, a),
+                );
+                !((to - from) - (from - before)).length().le(&limit)
+            });
         if jerk {
             self.self_contacts
                 .watch_for_tangles((JERK_WATCH + 1) * self.params.substeps);
@@ -93,24 +96,21 @@ impl Solver {
         }
     }
 
-    /// Finds every particle's offset bound at the substep's start, unless
-    /// the last ones still hold or a jerk leaves this substep unbounded.
-    pub(in crate::solver) fn find_offsets(&mut self) {
+    /// Starts the substep's offset bounds (`Offsets::begin`), unless a jerk
+    /// leaves this substep unbounded.
+    pub(in crate::solver) fn begin_offsets(&mut self) {
         if self.unbounded > 0 {
             self.unbounded -= 1;
             self.offsets.clear();
             return;
         }
         let t = self.stopwatch();
-        let exempt = self.self_contacts.tangled();
-        if exempt.is_some() || !self.offsets.hold(&self.state.position, &self.inv_mass) {
-            self.offsets.find(
-                &self.state.position,
-                &self.topology.triangles,
-                &self.spec,
-                exempt,
-            );
-        }
+        self.offsets.begin(
+            &self.state.position,
+            &self.topology.triangles,
+            &self.spec,
+            self.self_contacts.tangled(),
+        );
         self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
     }
 
@@ -121,36 +121,45 @@ impl Solver {
             &mut self.state.position,
             &self.inv_mass,
             EDGE_GAP * self.spec.thickness,
+            self.self_contacts.tangled(),
         );
     }
 
-    /// Brings every particle within its offset bound. At the substep's end
-    /// (`rounds`), where that moved a particle, the bounds are found again at
-    /// the clamped state (free of crossings like the substep's start) and
-    /// the particles go on from there towards where the sweeps took them, up
-    /// to [`OFFSET_ROUNDS`] times: a particle held back by a near layer
-    /// catches up with the rest instead of stretching its edges.
+    /// Leaves the substep's end where the update and sweeps took it if the
+    /// path there is known to form no crossing (`Offsets::path_clear`);
+    /// else bounds every particle at the substep's start and brings each
+    /// within its bound. Where that moved a particle, the bounds are found
+    /// again at the clamped state (free of crossings like the substep's
+    /// start) and the particles go on from there towards where the sweeps
+    /// took them, up to [`OFFSET_ROUNDS`] times: a particle held back by a
+    /// near layer catches up with the rest instead of stretching its edges.
     pub(in crate::solver) fn clamp_to_offsets(&mut self, rounds: bool) {
-        let t = self.stopwatch();
         let rounds = if rounds { OFFSET_ROUNDS } else { 1 };
-        let mut target = std::mem::take(&mut self.offset_target);
-        for round in 1..=rounds {
-            if round == 1 && rounds > 1 {
-                target.clone_from(&self.state.position);
+        let t = self.stopwatch();
+        let exempt = self.self_contacts.tangled();
+        let (x, triangles) = (&mut self.state.position, &self.topology.triangles);
+        if !self
+            .offsets
+            .path_clear(x, &self.inv_mass, triangles, &self.spec, exempt)
+        {
+            self.offsets.find_at_start(triangles, &self.spec, exempt);
+            let mut target = std::mem::take(&mut self.offset_target);
+            target.clone_from(&self.state.position);
+            for round in 1..=rounds {
+                let moved = self.offsets.clamp(&mut self.state.position, &self.inv_mass);
+                if moved == 0 || round == rounds {
+                    break;
+                }
+                self.offsets.find(
+                    &self.state.position,
+                    &self.topology.triangles,
+                    &self.spec,
+                    self.self_contacts.tangled(),
+                );
+                self.state.position.copy_from_slice(&target);
             }
-            let moved = self.offsets.clamp(&mut self.state.position, &self.inv_mass);
-            if moved == 0 || round == rounds {
-                break;
-            }
-            self.offsets.find(
-                &self.state.position,
-                &self.topology.triangles,
-                &self.spec,
-                self.self_contacts.tangled(),
-            );
-            self.state.position.copy_from_slice(&target);
+            self.offset_target = target;
         }
-        self.offset_target = target;
         self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
     }
 

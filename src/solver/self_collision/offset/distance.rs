@@ -13,47 +13,59 @@ use glam::Vec3;
 /// Detection", 5.1.5): the definition [`point_triangle_distances`] keeps to.
 #[cfg(test)]
 pub(super) fn point_triangle(p: Vec3, t: [Vec3; 3]) -> f32 {
+    match closest_on_triangle(p, t) {
+        Some(q) => p.distance(q),
+        // Degenerate: the nearest corner is an upper bound; use the edges.
+        None => {
+            let [a, b, c] = t;
+            segment_point(a, b, p)
+                .min(segment_point(b, c, p))
+                .min(segment_point(a, c, p))
+        }
+    }
+}
+
+/// The point of triangle `t` nearest to `p` (Ericson, "Real-Time Collision
+/// Detection", 5.1.5); `None` for a degenerate triangle.
+pub(super) fn closest_on_triangle(p: Vec3, t: [Vec3; 3]) -> Option<Vec3> {
     let [a, b, c] = t;
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return ap.length();
+        return Some(a);
     }
     let bp = p - b;
     let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return bp.length();
+        return Some(b);
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return p.distance(a + ab * v);
+        return Some(a + ab * v);
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return cp.length();
+        return Some(c);
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return p.distance(a + ac * w);
+        return Some(a + ac * w);
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return p.distance(b + (c - b) * w);
+        return Some(b + (c - b) * w);
     }
     let denom = va + vb + vc;
     if denom.abs() <= f32::MIN_POSITIVE {
-        // Degenerate: the nearest corner is an upper bound; use the edges.
-        return segment_point(a, b, p)
-            .min(segment_point(b, c, p))
-            .min(segment_point(a, c, p));
+        return None;
     }
     let inv = denom.recip();
     let (v, w) = (vb * inv, vc * inv);
-    p.distance(a + ab * v + ac * w)
+    Some(a + ab * v + ac * w)
 }
 
 /// The distance from `p` to the segment `a b`.

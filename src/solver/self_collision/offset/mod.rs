@@ -61,6 +61,14 @@ pub(crate) const RADIUS: f32 = 0.5;
 /// apart ([`Offsets::keep_edges_apart`]).
 pub(crate) const EDGE_GAP: f32 = 0.25;
 
+/// How much farther than it moved in a substep a particle is allowed to
+/// drift by a search made for that substep ([`Offsets::path_clear`]).
+const ALLOWANCE: f32 = 1.25;
+
+/// How many times the pairs that fail the path's test are drawn together
+/// before every particle is bounded instead ([`Offsets::path_clear`]).
+const DRAW_ROUNDS: u32 = 4;
+
 /// How much more a driven particle weighs than a free one with the same
 /// bound in the common motion ([`Offsets::common_motion`]).
 const DRIVEN_WEIGHT: f64 = 1e4;
@@ -69,7 +77,9 @@ const DRIVEN_WEIGHT: f64 = 1e4;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Offsets {
     near: NearPairs,
-    /// The positions the bounds were found at; empty: none yet.
+    /// The substep's start; empty: nothing to check or clamp.
+    from: Vec<Vec3>,
+    /// The positions the bounds were found at; empty: none.
     start: Vec<Vec3>,
     /// Per particle, how far beyond the common motion it may move from
     /// `start` (infinite for an exempt particle).
@@ -85,29 +95,111 @@ pub(crate) struct Offsets {
 }
 
 impl Offsets {
-    /// Forgets the bounds: the next substep finds them again.
+    /// Forgets the bounds and the substep's start: nothing is clamped
+    /// until the next [`Offsets::begin`].
     pub(crate) fn clear(&mut self) {
+        self.from.clear();
         self.start.clear();
         self.near.clear();
         self.checked = false;
     }
 
-    /// Whether the bounds found at an earlier substep still leave every
-    /// particle at `x` room to move: each within half its bound of where
-    /// the common motion carried it (a driven particle too, which its body
-    /// moves regardless).
-    pub(crate) fn hold(&self, x: &[Vec3], inv_mass: &[f32]) -> bool {
-        if self.start.len() != x.len() {
-            return false;
+    /// Starts a substep at `x` (free of crossings but for the `exempt`
+    /// particles): no bound yet, the near list made to pass `x` (searched
+    /// again at `x` if it does not), and the edge pairs nearer than a
+    /// quarter of the thickness found, to be kept apart.
+    pub(crate) fn begin(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        exempt: Option<&[bool]>,
+    ) {
+        self.start.clear();
+        self.bound.clear();
+        self.pairs.clear();
+        self.from.clear();
+        self.from.extend_from_slice(x);
+        self.near.new_substep();
+        if !self.near.holds(x, 0.0, exempt) && !self.near.search_ahead(x, triangles, spec) {
+            return;
         }
-        let t = self.common_motion(x, inv_mass);
-        if !t.is_finite() {
-            return false;
+        let (dx, dy) = spec.spacing();
+        let keep = (EDGE_GAP * spec.thickness).min(RADIUS * dx.min(dy));
+        self.nearest.clear();
+        self.nearest.resize(x.len(), keep);
+        self.near.nearest(
+            x,
+            triangles,
+            spec,
+            keep,
+            Nearest {
+                nearest: &mut self.nearest,
+                pairs: &mut self.pairs,
+                keep,
+            },
+        );
+        self.pairs.sort_unstable_by_key(|p| (p.e, p.f));
+    }
+
+    /// Whether the straight path from the substep's start to `x` is known
+    /// to form no crossing (`NearPairs::passes`), searching again at the
+    /// start if the list found before it does not tell, and else drawing
+    /// the corners of the pairs that fail together, up to
+    /// [`DRAW_ROUNDS`] times.
+    pub(crate) fn path_clear(
+        &mut self,
+        x: &mut [Vec3],
+        inv_mass: &[f32],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        exempt: Option<&[bool]>,
+    ) -> bool {
+        if self.from.len() != x.len() || self.near.passes(x, &self.from, triangles, exempt) {
+            return true;
         }
-        x.iter()
-            .zip(&self.start)
-            .zip(&self.bound)
-            .all(|((&now, &then), &b)| b == f32::INFINITY || (now - then - t).length() <= 0.5 * b)
+        // Drifted beyond the list: search again at the start, and if a
+        // particle moves farther in this substep alone than the list
+        // allows, with room for the moves measured.
+        if !self.near.pairs_failed() && !self.near.searched_at(&self.from) {
+            if !self.near.search_ahead(&self.from, triangles, spec) {
+                return false;
+            }
+            if self.near.passes(x, &self.from, triangles, exempt) {
+                return true;
+            }
+        }
+        if !self.near.pairs_failed() {
+            let allow: Vec<f32> = self.near.drifts().iter().map(|d| ALLOWANCE * d).collect();
+            if !self
+                .near
+                .search_allowing(&self.from, triangles, spec, &allow)
+            {
+                return false;
+            }
+            if self.near.passes(x, &self.from, triangles, exempt) {
+                return true;
+            }
+        }
+        for _ in 0..DRAW_ROUNDS {
+            self.near.draw_together(x, inv_mass);
+            if self.near.passes(x, &self.from, triangles, exempt) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Finds every particle's bound at the substep's start.
+    pub(crate) fn find_at_start(
+        &mut self,
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        exempt: Option<&[bool]>,
+    ) {
+        let from = std::mem::take(&mut self.from);
+        self.find(&from, triangles, spec, exempt);
+        self.from = from;
     }
 
     /// Finds every particle's bound at positions `x` (free of crossings but
@@ -221,8 +313,14 @@ impl Offsets {
     /// along the direction between their nearest points when found (the
     /// side they were on), one pair after another; pairs with an exempt
     /// particle are left alone.
-    pub(crate) fn keep_edges_apart(&self, x: &mut [Vec3], inv_mass: &[f32], thickness: f32) {
-        if self.start.len() != x.len() {
+    pub(crate) fn keep_edges_apart(
+        &self,
+        x: &mut [Vec3],
+        inv_mass: &[f32],
+        thickness: f32,
+        exempt: Option<&[bool]>,
+    ) {
+        if self.from.len() != x.len() {
             return;
         }
         for p in &self.pairs {
@@ -230,7 +328,7 @@ impl Offsets {
             let [f0, f1] = p.f.map(|k| k as usize);
             if [e0, e1, f0, f1]
                 .iter()
-                .any(|&k| self.bound[k] == f32::INFINITY)
+                .any(|&k| exempt.is_some_and(|t| t[k]))
             {
                 continue;
             }

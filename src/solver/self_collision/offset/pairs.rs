@@ -33,16 +33,131 @@
 
 use glam::Vec3;
 
-use super::distance::{closest_on_segments, point_triangle_distances, segment_distances};
+use super::distance::{
+    closest_on_segments, closest_on_triangle, point_triangle_distances, segment_distances,
+};
 use super::{EdgePair, mean_displacement};
 use crate::solver::cloth::ClothSpec;
 use crate::solver::self_collision::prune::{SortedBoxes, widest_axis};
 use crate::solver::self_collision::tangles::edges_at;
 use crate::solver::team;
 
-/// The list's skin, in rest spacings: how far, twice over, the particles
-/// may drift beyond their mean motion before the list is searched again.
-const SKIN: f32 = 1.0;
+/// The list's reach, in rest spacings: it holds every pair nearer than
+/// that at the search. Beyond the bounds' radius it is the skin: how far,
+/// twice over, the particles may drift beyond their mean motion before a
+/// search for the bounds is made again.
+const REACH: f32 = 1.0;
+
+/// How many substeps' moves a search allows each particle to drift
+/// ([`NearPairs::search_ahead`]), and at most how many reaches.
+const AHEAD: f32 = 4.0;
+const AHEAD_MOST: f32 = 1.0;
+
+/// How much of a listed pair's distance at the search its corners' moves
+/// may differ by before the path is no longer known to be clear
+/// ([`NearPairs::passes`]): below 1, with room for rounding.
+const PATH_SHARE: f32 = 0.9;
+
+/// How much of a listed pair's distance at the search its corners' moves
+/// are brought to differ by where they differed by more than
+/// [`PATH_SHARE`] of it ([`NearPairs::draw_together`]).
+const DRAW_SHARE: f32 = 0.8;
+
+/// How far each particle has drifted since the search beyond the
+/// particles' mean motion, and each primitive's farthest corner.
+#[derive(Clone, Debug, Default)]
+struct Drift {
+    particle: Vec<f32>,
+    triangle: Vec<f32>,
+    segment: Vec<f32>,
+}
+
+impl Drift {
+    /// Each particle's drift from `at` to `now`.
+    fn particles(&mut self, now: &[Vec3], at: &[Vec3]) {
+        let t = mean_displacement(now, at);
+        self.particle.clear();
+        self.particle
+            .extend(now.iter().zip(at).map(|(a, b)| (*a - *b - t).length()));
+    }
+
+    /// No drift: the positions of the search.
+    fn zero(&mut self, n: usize) {
+        self.particle.clear();
+        self.particle.resize(n, 0.0);
+    }
+
+    /// Each triangle's and edge's largest drift among its corners.
+    fn primitives(&mut self, triangles: &[[u32; 3]], segments: &[[u32; 2]]) {
+        let drift = &self.particle;
+        let most = |ids: &[u32]| ids.iter().fold(0.0f32, |m, &k| m.max(drift[k as usize]));
+        self.triangle.clear();
+        self.triangle.extend(triangles.iter().map(|t| most(t)));
+        self.segment.clear();
+        self.segment.extend(segments.iter().map(|e| most(e)));
+    }
+}
+
+/// A listed pair: a particle and a triangle, or two edges (indices in the
+/// list's `segments`).
+#[derive(Clone, Copy, Debug)]
+enum Pair {
+    Face(u32, u32),
+    Edge(u32, u32),
+}
+
+impl Pair {
+    /// The two primitives' particles.
+    fn corners(self, triangles: &[[u32; 3]], segments: &[[u32; 2]]) -> Corners {
+        match self {
+            Pair::Face(p, t) => {
+                let [a, b, c] = triangles[t as usize];
+                Corners {
+                    ids: [p, a, b, c],
+                    split: 1,
+                }
+            }
+            Pair::Edge(i, j) => {
+                let (e, f) = (segments[i as usize], segments[j as usize]);
+                Corners {
+                    ids: [e[0], e[1], f[0], f[1]],
+                    split: 2,
+                }
+            }
+        }
+    }
+}
+
+/// A pair's particles: one primitive's `ids[..split]`, the other's the
+/// rest.
+#[derive(Clone, Copy, Debug)]
+struct Corners {
+    ids: [u32; 4],
+    split: usize,
+}
+
+impl Corners {
+    /// How far apart along `normal` the first primitive's corners are from
+    /// the other's at `x`: the least of the first's against the most of
+    /// the other's.
+    fn gap(&self, x: &[Vec3], normal: Vec3) -> f32 {
+        let (a, b) = self.ids.split_at(self.split);
+        let along = |k: &u32| normal.dot(x[*k as usize]);
+        let least = a.iter().map(along).fold(f32::INFINITY, f32::min);
+        let most = b.iter().map(along).fold(f32::NEG_INFINITY, f32::max);
+        least - most
+    }
+}
+
+/// A listed pair that failed [`NearPairs::passes`].
+#[derive(Clone, Copy, Debug)]
+struct Failing {
+    corners: Corners,
+    /// From the other primitive's nearest point to the first's at the
+    /// substep's start, unit, and their distance.
+    normal: Vec3,
+    distance: f32,
+}
 
 /// How much, in parts of the reach, the boxes of a search are grown beyond
 /// it: room for rounding, so that no pair nearer than the reach is missed.
@@ -68,18 +183,25 @@ pub(super) struct NearPairs {
     edges: Vec<(u32, u32, f32)>,
     /// The positions of the last search; empty: none yet.
     at: Vec<Vec3>,
-    /// The radius and skin of the last search.
-    reach: (f32, f32),
-    /// Scratch: each particle's drift since the search.
-    drift: Vec<f32>,
+    /// The reach of the last search, and each particle's allowance.
+    reach: f32,
+    allow: Vec<f32>,
+    /// Scratch: the drifts since the search, of the positions asked about
+    /// and of the substep's start.
+    drift: Drift,
+    drift_from: Drift,
+    /// Scratch: each particle's move in the substep beyond their mean.
+    step: Drift,
+    scratch_allow: Vec<f32>,
+    /// Whether `drift_from` is the substep's start's.
+    start_known: bool,
     /// The mesh's edges, in the order the list refers to them by.
     segments: Vec<[u32; 2]>,
-    /// Scratch for [`NearPairs::nearest`]: each triangle's and edge's
-    /// largest drift among its corners; the pairs to measure.
-    tri_drift: Vec<f32>,
-    seg_drift: Vec<f32>,
+    /// Scratch: the pairs to measure.
     near_faces: Vec<(u32, u32)>,
     near_edges: Vec<(u32, u32)>,
+    /// The pairs the last [`NearPairs::passes`] failed.
+    failing: Vec<Failing>,
 }
 
 /// What [`NearPairs::nearest`] finds.
@@ -112,23 +234,15 @@ impl NearPairs {
         r: f32,
         out: Nearest<'_>,
     ) -> bool {
-        let (dx, dy) = spec.spacing();
-        let skin = SKIN * dx.min(dy);
-        if !self.holds(x, (r, skin)) && !self.search(x, triangles, spec, (r, skin)) {
+        if !self.holds(x, r, None) && !self.search(x, triangles, spec) {
             return false;
         }
-        // Each primitive's largest drift among its corners.
-        let drift = &self.drift;
-        let most = |ids: &[u32]| ids.iter().fold(0.0f32, |m, &k| m.max(drift[k as usize]));
-        self.tri_drift.clear();
-        self.tri_drift.extend(triangles.iter().map(|t| most(t)));
-        self.seg_drift.clear();
-        self.seg_drift.extend(self.segments.iter().map(|e| most(e)));
+        self.drift.primitives(triangles, &self.segments);
+        let (drift, tri_drift) = (&self.drift.particle, &self.drift.triangle);
         let lower = |k: u32, d: f32, nearest: &mut [f32]| {
             let m = &mut nearest[k as usize];
             *m = m.min(d);
         };
-        let tri_drift = &self.tri_drift;
         self.near_faces.clear();
         self.near_faces.extend(
             self.faces
@@ -145,7 +259,7 @@ impl NearPairs {
         });
         // The edge pairs that may have come nearer than `r`, their
         // distances eight at a time.
-        let seg_drift = &self.seg_drift;
+        let seg_drift = &self.drift.segment;
         self.near_edges.clear();
         self.near_edges.extend(
             self.edges
@@ -179,41 +293,240 @@ impl NearPairs {
         true
     }
 
-    /// Whether the list found at the last search still holds for `x`
-    /// (same radius and skin, every particle's drift below half the skin,
-    /// with a tenth to spare for rounding), measuring each particle's drift.
-    fn holds(&mut self, x: &[Vec3], reach: (f32, f32)) -> bool {
-        if self.at.len() != x.len() || self.reach != reach {
+    /// Whether the list found at the last search still holds for `x` at
+    /// radius `r`: every pair left out is still farther than `r` while each
+    /// particle's drift is below half of `reach − r`, with a tenth to spare
+    /// for rounding. Measures each particle's drift; `exempt` particles'
+    /// drifts are not held to it.
+    pub(super) fn holds(&mut self, x: &[Vec3], r: f32, exempt: Option<&[bool]>) -> bool {
+        if self.at.len() != x.len() {
             return false;
         }
-        let t = mean_displacement(x, &self.at);
-        self.drift.clear();
+        self.drift.particles(x, &self.at);
+        let limit = 0.45 * (self.reach - r);
         self.drift
-            .extend(x.iter().zip(&self.at).map(|(a, b)| (*a - *b - t).length()));
-        let limit = 0.45 * reach.1;
-        self.drift.iter().all(|d| d.le(&limit))
+            .particle
+            .iter()
+            .zip(&self.allow)
+            .enumerate()
+            .all(|(i, (d, a))| d.le(&(limit + a)) || exempt.is_some_and(|e| e[i]))
     }
 
-    /// Finds every pair nearer than `r + skin` at `x`. Returns false if a
-    /// position is not finite.
-    fn search(
+    /// Whether no pair of primitives sharing no particle can meet on the
+    /// straight path from the substep's start `from` (free of crossings) to
+    /// `x` (module docs, "The path"): every particle's drift since the
+    /// search is below `0.45 · reach`, and the corners of every listed pair
+    /// have moved apart from one another by less than [`PATH_SHARE`] of the
+    /// pair's distance, either since the search or since `from`. Pairs and
+    /// drifts of `exempt` particles are not held to it. The pairs that fail
+    /// are kept for [`NearPairs::draw_together`].
+    pub(super) fn passes(
+        &mut self,
+        x: &[Vec3],
+        from: &[Vec3],
+        triangles: &[[u32; 3]],
+        exempt: Option<&[bool]>,
+    ) -> bool {
+        self.failing.clear();
+        if !self.holds(x, 0.0, exempt) {
+            return false;
+        }
+        // The start's drifts since the search (none if it was made there;
+        // found once a substep), and this substep's moves beyond their mean.
+        if !self.start_known {
+            if self.at == from {
+                self.drift_from.zero(x.len());
+            } else {
+                self.drift_from.particles(from, &self.at);
+            }
+            self.drift_from.primitives(triangles, &self.segments);
+            self.start_known = true;
+        }
+        self.step.particles(x, from);
+        self.step.primitives(triangles, &self.segments);
+        let segments = &self.segments;
+        let free = |ids: &[u32]| exempt.is_none_or(|e| ids.iter().all(|&k| !e[k as usize]));
+        // A pair at least `d − start` apart at the substep's start whose
+        // corners have moved apart by at most `step` since is clear.
+        let (start, step) = (&self.drift_from, &self.step);
+        self.near_faces.clear();
+        for &(p, t, d) in &self.faces {
+            let (p_, t_) = (p as usize, t as usize);
+            let (moved, gap) = (
+                step.particle[p_] + step.triangle[t_],
+                d - start.particle[p_] - start.triangle[t_],
+            );
+            if !moved.lt(&(PATH_SHARE * gap)) && free(&[p]) && free(&triangles[t_]) {
+                self.near_faces.push((p, t));
+            }
+        }
+        self.near_edges.clear();
+        for &(i, j, d) in &self.edges {
+            let (i_, j_) = (i as usize, j as usize);
+            let (moved, gap) = (
+                step.segment[i_] + step.segment[j_],
+                d - start.segment[i_] - start.segment[j_],
+            );
+            if !moved.lt(&(PATH_SHARE * gap)) && free(&segments[i_]) && free(&segments[j_]) {
+                self.near_edges.push((i, j));
+            }
+        }
+        // Since the substep's start: the plane between the pair's nearest
+        // points there still parts them (a degenerate triangle is left to
+        // its edges).
+        let failing = &mut self.failing;
+        let mut check = |pair: Pair, nearest: Option<(Vec3, Vec3)>| {
+            let Some((on_one, on_other)) = nearest else {
+                return;
+            };
+            let corners = pair.corners(triangles, segments);
+            let distance = on_one.distance(on_other);
+            let normal = (on_one - on_other) / distance;
+            let wanted = (1.0 - PATH_SHARE) * distance;
+            if !normal.is_finite() || !corners.gap(x, normal).ge(&wanted) {
+                failing.push(Failing {
+                    corners,
+                    normal,
+                    distance,
+                });
+            }
+        };
+        for &(p, t) in &self.near_faces {
+            let tri = triangles[t as usize].map(|k| from[k as usize]);
+            let q = closest_on_triangle(from[p as usize], tri);
+            check(Pair::Face(p, t), q.map(|q| (from[p as usize], q)));
+        }
+        for &(i, j) in &self.near_edges {
+            let (e, f) = (segments[i as usize], segments[j as usize]);
+            let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| from[k as usize]);
+            let (_, s, t) = closest_on_segments(u, v, a, b);
+            check(Pair::Edge(i, j), Some((u + (v - u) * s, a + (b - a) * t)));
+        }
+        self.failing.is_empty()
+    }
+
+    /// Parts each pair [`NearPairs::passes`] failed along the normal
+    /// between its nearest points at the substep's start, as an inelastic
+    /// touch would: each primitive is moved whole along it, shared by
+    /// mass (a primitive with a driven corner stays), until the gap is
+    /// `1 − DRAW_SHARE` of the pair's distance there. Momentum is kept.
+    /// A pair with driven corners on both sides is left as it is.
+    pub(super) fn draw_together(&self, x: &mut [Vec3], inv_mass: &[f32]) {
+        for f in &self.failing {
+            let gap = f.corners.gap(x, f.normal);
+            let wanted = (1.0 - DRAW_SHARE) * f.distance;
+            if !gap.lt(&wanted) || !f.normal.is_finite() {
+                continue;
+            }
+            let (one, other) = f.corners.ids.split_at(f.corners.split);
+            // Each side's mass; infinite if it has a driven corner.
+            let mass = |ids: &[u32]| {
+                ids.iter().fold(0.0f32, |m, &k| {
+                    let w = inv_mass[k as usize];
+                    if w == 0.0 { f32::INFINITY } else { m + 1.0 / w }
+                })
+            };
+            let (m1, m2) = (mass(one), mass(other));
+            let share = match (m1.is_finite(), m2.is_finite()) {
+                (true, true) => m2 / (m1 + m2),
+                (true, false) => 1.0,
+                (false, true) => 0.0,
+                (false, false) => continue,
+            };
+            let push = f.normal * (wanted - gap);
+            for &k in one {
+                x[k as usize] += push * share;
+            }
+            for &k in other {
+                x[k as usize] -= push * (1.0 - share);
+            }
+        }
+    }
+
+    /// Whether the last [`NearPairs::passes`] failed on pairs (else on a
+    /// drift, or it passed).
+    pub(super) fn pairs_failed(&self) -> bool {
+        !self.failing.is_empty()
+    }
+
+    /// [`NearPairs::search`], each particle allowed to drift [`AHEAD`]
+    /// times as far as it moved beyond the mean in the last substep
+    /// measured ([`NearPairs::passes`]), up to [`AHEAD_MOST`] reaches: a
+    /// particle that moves fast keeps its pairs for as long as the slow
+    /// ones.
+    pub(super) fn search_ahead(
         &mut self,
         x: &[Vec3],
         triangles: &[[u32; 3]],
         spec: &ClothSpec,
-        (r, skin): (f32, f32),
     ) -> bool {
+        let (dx, dy) = spec.spacing();
+        let most = AHEAD_MOST * REACH * dx.min(dy);
+        let mut allow = std::mem::take(&mut self.scratch_allow);
+        allow.clear();
+        if self.step.particle.len() == x.len() {
+            allow.extend(self.step.particle.iter().map(|d| (AHEAD * d).min(most)));
+        }
+        let found = self.search_allowing(x, triangles, spec, &allow);
+        self.scratch_allow = allow;
+        found
+    }
+
+    /// A new substep starts: its start's drifts are to be found.
+    pub(super) fn new_substep(&mut self) {
+        self.start_known = false;
+    }
+
+    /// Each particle's drift found by the last [`NearPairs::holds`].
+    pub(super) fn drifts(&self) -> &[f32] {
+        &self.drift.particle
+    }
+
+    /// Whether the last search was made at `x`.
+    pub(super) fn searched_at(&self, x: &[Vec3]) -> bool {
+        self.at == x
+    }
+
+    /// Finds every pair nearer than the reach at `x` (a state free of
+    /// crossings). Returns false if a position is not finite.
+    pub(super) fn search(&mut self, x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> bool {
+        self.search_allowing(x, triangles, spec, &[])
+    }
+
+    /// [`NearPairs::search`], each particle allowed to drift `allow[i]`
+    /// farther before the list no longer holds (none if `allow` is
+    /// empty): a pair is listed if it is nearer than the reach plus the
+    /// largest allowance among each primitive's corners.
+    pub(super) fn search_allowing(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        allow: &[f32],
+    ) -> bool {
+        self.start_known = false;
+        self.allow.clear();
+        self.allow.extend_from_slice(allow);
+        self.allow.resize(x.len(), 0.0);
         self.at.clear();
         self.faces.clear();
         self.edges.clear();
         if !x.iter().all(|v| v.is_finite()) {
             return false;
         }
-        let reach = r + skin;
+        let (dx, dy) = spec.spacing();
+        let reach = REACH * dx.min(dy);
         let axis = widest_axis(x);
         // Particle against triangle: the particles within `reach` of a
         // triangle's box, then by distance.
-        self.points.build(axis, x.iter().map(|&p| (p, p)));
+        let allow = &self.allow;
+        let most = |ids: &[u32]| ids.iter().fold(0.0f32, |m, &k| m.max(allow[k as usize]));
+        self.points.build(
+            axis,
+            x.iter()
+                .zip(allow)
+                .map(|(&p, &a)| (p - Vec3::splat(a), p + Vec3::splat(a))),
+        );
         let threads = if triangles.len() >= PARALLEL_MIN {
             team::available()
         } else {
@@ -229,7 +542,8 @@ impl NearPairs {
                 let tri = triangles[t];
                 let c = tri.map(|k| x[k as usize]);
                 let (lo, hi) = (c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2]));
-                points.within(lo - Vec3::splat(grow), hi + Vec3::splat(grow), |p| {
+                let grow = Vec3::splat(grow + most(&tri));
+                points.within(lo - grow, hi + grow, |p| {
                     if !tri.contains(&p) {
                         near.push((p, t as u32));
                     }
@@ -237,7 +551,7 @@ impl NearPairs {
             }
             let mut found = Vec::new();
             for_each_face_distance(x, triangles, &near, |p, t, d| {
-                if d < reach {
+                if d < reach + allow[p as usize] + most(&triangles[t as usize]) {
                     found.push((p, t, d));
                 }
             });
@@ -253,11 +567,11 @@ impl NearPairs {
                 self.segments.push([p, q]);
             }
         }
-        let half = Vec3::splat(0.5 * grow);
         self.boxes.build(
             axis,
             self.segments.iter().map(|e| {
                 let (u, v) = (x[e[0] as usize], x[e[1] as usize]);
+                let half = Vec3::splat(0.5 * grow + most(e));
                 (u.min(v) - half, u.max(v) + half)
             }),
         );
@@ -270,7 +584,7 @@ impl NearPairs {
             let mut found = Vec::new();
             for_each_edge_distance(x, segments, &near, |i, j, d| {
                 let (e, f) = (segments[i as usize], segments[j as usize]);
-                if d < reach && !f.contains(&e[0]) && !f.contains(&e[1]) {
+                if d < reach + most(&e) + most(&f) && !f.contains(&e[0]) && !f.contains(&e[1]) {
                     found.push((i, j, d));
                 }
             });
@@ -278,9 +592,8 @@ impl NearPairs {
         });
         self.edges.extend(blocks.into_iter().flatten());
         self.at.extend_from_slice(x);
-        self.reach = (r, skin);
-        self.drift.clear();
-        self.drift.resize(x.len(), 0.0);
+        self.reach = reach;
+        self.drift.zero(x.len());
         true
     }
 }
