@@ -45,10 +45,12 @@
 //! Contacts keep layers apart but cannot by themselves promise that no
 //! crossing forms (a particle can pass a layer it had no contact with; two
 //! edges can pass through each other with no particle over a face). The
-//! **offset bounds** do (`offset/`): every particle's move is held to a
-//! fraction of its distance to the nearest primitive it shares no particle
-//! with, found at a crossing-free state, so that no pair reaches distance 0
-//! on the way.
+//! **path check** does (`offset/`): from a crossing-free start, no pair of
+//! primitives sharing no particle may close more than most of its distance
+//! in a substep, so none reaches distance 0 on the way; a pair that would
+//! is parted, and where that does not do, every particle's move is held to
+//! a fraction of its distance to the nearest such primitive (the offset
+//! bounds).
 //!
 //! Here: the contact, its projection and friction; the family that
 //! projects the contacts is [`families::self_collision`](super::families::self_collision).
@@ -58,7 +60,7 @@
 //! `pick.rs`: the contact search of a substep (`SelfContacts`).
 //! `tangles.rs`: the measures (penetration depths, crossings) and the
 //! tangles a jerk leaves; `untangle.rs`: their pull apart. `offset/`: the
-//! offset bounds (`Offsets`).
+//! path check and the offset bounds (`Offsets`).
 
 pub(crate) mod broad_phase;
 mod offset;

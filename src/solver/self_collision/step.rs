@@ -76,7 +76,7 @@ impl Solver {
     }
 
     /// Looks for crossings at the step's start unless the cloth is known to
-    /// be free of them (the offset bounds keep it so, but for a driven
+    /// be free of them (the path check keeps it so, but for a driven
     /// particle that went beyond its bound, or a jerk): if any, the tangled
     /// particles are left alone, exempt from their bounds and from the
     /// contacts, until they come apart.
@@ -96,8 +96,8 @@ impl Solver {
         }
     }
 
-    /// Starts the substep's offset bounds (`Offsets::begin`), unless a jerk
-    /// leaves this substep unbounded.
+    /// Starts the substep's path check (`Offsets::begin`), unless a jerk
+    /// leaves this substep unchecked.
     pub(in crate::solver) fn begin_offsets(&mut self) {
         if self.unbounded > 0 {
             self.unbounded -= 1;
@@ -114,8 +114,8 @@ impl Solver {
         self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
     }
 
-    /// Pushes apart the edge pairs the bounds found nearer than a fraction
-    /// of the thickness.
+    /// Pushes apart the edge pairs found nearer than a fraction of the
+    /// thickness at the substep's start.
     pub(in crate::solver) fn keep_edges_apart(&mut self) {
         self.offsets.keep_edges_apart(
             &mut self.state.position,
@@ -125,14 +125,16 @@ impl Solver {
         );
     }
 
-    /// Leaves the substep's end where the update and sweeps took it if the
-    /// path there is known to form no crossing (`Offsets::path_clear`);
-    /// else bounds every particle at the substep's start and brings each
-    /// within its bound. Where that moved a particle, the bounds are found
-    /// again at the clamped state (free of crossings like the substep's
-    /// start) and the particles go on from there towards where the sweeps
-    /// took them, up to [`OFFSET_ROUNDS`] times: a particle held back by a
-    /// near layer catches up with the rest instead of stretching its edges.
+    /// Leaves the particles where the update (or the sweeps, at the
+    /// substep's end: `rounds`) took them if the path there from the
+    /// substep's start forms no crossing, parting the pairs that approach
+    /// too fast (`Offsets::path_clear`); else bounds every particle at the
+    /// substep's start and brings each within its bound. At the end, where
+    /// that moved a particle, the bounds are found again at the clamped
+    /// state (free of crossings like the substep's start) and the particles
+    /// go on from there towards where the sweeps took them, up to
+    /// [`OFFSET_ROUNDS`] times: a particle held back by a near layer catches
+    /// up with the rest instead of stretching its edges.
     pub(in crate::solver) fn clamp_to_offsets(&mut self, rounds: bool) {
         let rounds = if rounds { OFFSET_ROUNDS } else { 1 };
         let t = self.stopwatch();

@@ -1,42 +1,38 @@
-//! Offset bounds: how far each particle may move before a crossing could
-//! form (after Chen et al., "Offset Geometric Contact", ACM TOG 2025).
+//! No crossing forms in a substep: its path is checked, and where the check
+//! fails, every particle is bounded (after Chen et al., "Offset Geometric
+//! Contact", ACM TOG 2025). docs/method.md §11b has the whole argument.
 //!
-//! **The bound.** At a state `X⁰` free of crossings, let `d_i` be the
-//! smallest distance from a primitive of particle `i` (the particle itself,
-//! its edges) to a primitive it shares no particle with: a particle against
-//! a triangle, an edge against an edge; capped at the query radius `r`.
-//! Let every particle stay within `b_i = γ d_i` (`γ < ½`) of where a common
-//! translation `T` would carry it: `|x_i − X⁰_i − T| ≤ b_i`. A translation
-//! changes no distance, and a point of a primitive is a convex combination
-//! of its corners, so it moves (beyond `T`) by at most the largest `b` of
-//! its corners; a pair at distance `D ≥ max(d_i)` over its corners comes
-//! no nearer than `D − 2γD > 0`. Each such set of states is convex (a ball
-//! per particle, shifted by any `T`), so the straight path between two
-//! states that both satisfy it, as a substep's update and sweeps move the
-//! particles, satisfies it too. No pair reaches distance 0 on the way, and
-//! an edge that crosses a triangle only by passing through its border
-//! (edge against edge) or by an end passing through its face (particle
-//! against triangle): **no crossing forms**. No continuous collision test
-//! is needed, only the distances at `X⁰`.
+//! **The path.** A substep moves the particles from `X⁰` (free of crossings
+//! but for the tangled ones) to `X¹` along the straight path. An edge comes
+//! to cross a triangle only by touching its border (edge against edge) or
+//! by an end passing its face (particle against triangle), so no crossing
+//! forms if no particle–triangle or edge–edge pair sharing no particle
+//! reaches distance 0 on the way. A point of a primitive is a convex
+//! combination of its corners, so a pair at distance `D⁰` at `X⁰` stays at
+//! least `D⁰ − max |u_a − u_b|` apart (`u` the corners' moves), and that is
+//! at least `D⁰ − δ_A − δ_B` with `δ` each primitive's largest move beyond
+//! a common translation. [`Offsets::path_clear`] checks this for every pair
+//! of the near list (`pairs.rs`), exactly for the few the cheap test fails
+//! (the plane between their nearest points still parts them), and parts
+//! those that fail that along it, as an inelastic touch would.
 //!
-//! **In weft.** The bounds are found at the start of a substep, from its
-//! crossing-free positions, and kept for the following substeps while every
-//! particle is still within half its bound (a cloth at rest, or carried
-//! along, keeps them; a flap finds them again). After the update and again
-//! at the end of the substep, every free particle is brought back within its
-//! ball ([`Offsets::clamp`]), relative to the particles' mean displacement,
-//! so a cloth carried along at speed is not held back. Driven particles
-//! follow their bodies and are not clamped. Tangled particles (a jerk drags
-//! the cloth through itself) are exempt: their state is not free of
-//! crossings, and the bound would hold the tangle instead of letting it
-//! come apart.
+//! **The bounds, the fallback.** Where the path still is not clear, every
+//! particle `i` gets a bound `b_i = γ d_i` (`γ < ½`, `d_i` its distance to
+//! the nearest primitive sharing no particle with it, capped at the radius
+//! `r`) at `X⁰` and is brought within it of where the common motion
+//! carried it ([`Offsets::clamp`]): a pair at distance `D` comes no nearer
+//! than `D − 2γD > 0`, and the balls are convex, so the straight path
+//! keeps them. Driven particles follow their bodies and are not clamped.
+//! Tangled particles (a jerk drags the cloth through itself) are exempt
+//! from both: their state is not free of crossings, and holding it would
+//! hold the tangle instead of letting it come apart.
 //!
 //! The distances come from a list of the primitive pairs near enough to
-//! matter, kept from one search to the next while the particles drift
-//! less than a skin (`pairs.rs`); the distance functions are in
-//! `distance.rs`. A minimum does not depend on the order pairs are met in,
-//! and the edge pairs pushed apart come in the list's order, which the
-//! positions alone fix: the bounds are the same for any number of threads.
+//! matter, kept from one search to the next while the motion allows
+//! (`pairs.rs`); the distance functions are in `distance.rs`. A minimum
+//! does not depend on the order pairs are met in, and the pairs parted and
+//! the edge pairs pushed apart come in the list's order, which the
+//! positions alone fix: the results are the same for any number of threads.
 
 mod distance;
 mod pairs;

@@ -1,35 +1,40 @@
-//! The primitive pairs near enough to matter for the offset bounds, kept
-//! from one search to the next while the motion allows (a Verlet list).
+//! The primitive pairs near enough to matter for the path's check and the
+//! bounds, kept from one search to the next while the motion allows (a
+//! Verlet list).
 //!
-//! A bound needs, for every particle, the distance to the nearest primitive
-//! it shares no particle with, capped at the radius `r`. A search finds
-//! every particle–triangle and edge–edge pair nearer than `r + skin`, with
-//! its distance `D` then. Let `δ_i` be how far particle `i` has since moved
+//! A search finds every particle–triangle and edge–edge pair nearer than
+//! the reach `ρ` (plus each primitive's allowance, below), with its
+//! distance `D` then. Let `Δ_i` be how far particle `i` has since moved
 //! beyond the particles' mean motion (a translation changes no distance).
-//! A point of a primitive is a convex combination of its corners, so a pair
-//! is now at least `D − δ_A − δ_B` apart, `δ_A` the largest `δ` among the
-//! corners of one primitive and `δ_B` of the other. So:
+//! A point of a primitive is a convex combination of its corners, so a
+//! pair is now at least `D − Δ_A − Δ_B` apart, `Δ_A` the largest `Δ` among
+//! the corners of one primitive and `Δ_B` of the other. So:
 //!
-//! - a pair left out of the list (`D ≥ r + skin`) is still farther than
-//!   `r` while every `δ` is below half the skin: the list holds, and a new
-//!   search is made only once a particle has drifted farther;
-//! - a listed pair with `D − δ_A − δ_B ≥ r` is still farther than `r`, and
-//!   its distance is not computed at all. Right after a search only the
-//!   pairs nearer than `r` are; a flat, unstretched grid has none (no
-//!   primitive comes nearer than `1/√2` of a spacing to one it shares no
-//!   particle with).
+//! - a pair left out of the list (`D ≥ ρ`) is not met while every `Δ` is
+//!   below `0.45 ρ` ([`NearPairs::holds`]), and stays farther than a
+//!   radius `r` while every `Δ` is below `0.45 (ρ − r)`: a new search is
+//!   made only once a particle has drifted farther. A search may allow each
+//!   particle more ([`NearPairs::search_ahead`]): four times what it moved
+//!   in its last substep, a pair then listed if nearer than `ρ` plus each
+//!   primitive's largest allowance;
+//! - a listed pair's lower bound `D − Δ_A − Δ_B` at a substep's start,
+//!   against how far its corners moved in the substep, clears the path for
+//!   most pairs without a distance ([`NearPairs::passes`]); the rest are
+//!   checked along the normal between their nearest points, and parted
+//!   along it where they approach too fast ([`NearPairs::draw_together`]);
+//! - for the bounds, a listed pair whose lower bound is at least `r` is
+//!   farther than `r` and not measured ([`NearPairs::nearest`]).
 //!
-//! The search tests boxes before distances: a particle nearer than
-//! `ρ = r + skin` to a triangle is inside the triangle's box grown by `ρ`,
-//! and two edges nearer than `ρ` have boxes that overlap when each is grown
-//! by `ρ/2`.
-//! The particles, and the edges' boxes, sorted along the axis the cloth
-//! spreads farthest along (`prune.rs`), give the candidates; their
-//! distances are measured eight at a time, each bit for bit the distance
-//! measured alone (`distance.rs`). The threads search contiguous blocks of
-//! triangles (then of sorted edges), joined in block order, and which
-//! pairs are near depends on the positions alone, so the list does not
-//! depend on the number of threads.
+//! The search tests boxes before distances: a particle nearer than `ρ` to a
+//! triangle is inside the triangle's box grown by `ρ`, and two edges nearer
+//! than `ρ` have boxes that overlap when each is grown by `ρ/2` (each box,
+//! the particles' too, grown by its allowance besides). The particles' and
+//! the edges' boxes, sorted along the axis the cloth spreads farthest along
+//! (`prune.rs`), give the candidates; their distances are measured eight at
+//! a time, each bit for bit the distance measured alone (`distance.rs`).
+//! The threads search contiguous blocks of triangles (then of sorted
+//! edges), joined in block order, and which pairs are near depends on the
+//! positions alone, so the list does not depend on the number of threads.
 
 use glam::Vec3;
 
@@ -43,9 +48,9 @@ use crate::solver::self_collision::tangles::edges_at;
 use crate::solver::team;
 
 /// The list's reach, in rest spacings: it holds every pair nearer than
-/// that at the search. Beyond the bounds' radius it is the skin: how far,
-/// twice over, the particles may drift beyond their mean motion before a
-/// search for the bounds is made again.
+/// that at the search (and a particle's allowance farther). The particles
+/// may drift beyond their mean motion by 0.45 of it, less the bounds'
+/// radius for the bounds, before a search is made again.
 const REACH: f32 = 1.0;
 
 /// How many substeps' moves a search allows each particle to drift
@@ -53,14 +58,13 @@ const REACH: f32 = 1.0;
 const AHEAD: f32 = 4.0;
 const AHEAD_MOST: f32 = 1.0;
 
-/// How much of a listed pair's distance at the search its corners' moves
-/// may differ by before the path is no longer known to be clear
-/// ([`NearPairs::passes`]): below 1, with room for rounding.
+/// How much of a pair's distance at a substep's start it may close in the
+/// substep for the path to be clear ([`NearPairs::passes`]): below 1,
+/// with room for rounding.
 const PATH_SHARE: f32 = 0.9;
 
-/// How much of a listed pair's distance at the search its corners' moves
-/// are brought to differ by where they differed by more than
-/// [`PATH_SHARE`] of it ([`NearPairs::draw_together`]).
+/// How much of it a pair that closed more is left to have closed once
+/// parted ([`NearPairs::draw_together`]).
 const DRAW_SHARE: f32 = 0.8;
 
 /// How far each particle has drifted since the search beyond the
@@ -314,12 +318,14 @@ impl NearPairs {
 
     /// Whether no pair of primitives sharing no particle can meet on the
     /// straight path from the substep's start `from` (free of crossings) to
-    /// `x` (module docs, "The path"): every particle's drift since the
-    /// search is below `0.45 · reach`, and the corners of every listed pair
-    /// have moved apart from one another by less than [`PATH_SHARE`] of the
-    /// pair's distance, either since the search or since `from`. Pairs and
-    /// drifts of `exempt` particles are not held to it. The pairs that fail
-    /// are kept for [`NearPairs::draw_together`].
+    /// `x` (docs/method.md §11b): every particle's drift since the search
+    /// is below `0.45 · reach`, and every listed pair closed less than
+    /// [`PATH_SHARE`] of its distance at `from`: its primitives' largest
+    /// moves in the substep beyond the mean add up to less than that share
+    /// of a lower bound on it, or else the plane between its nearest points
+    /// at `from` still parts its corners by the rest. Pairs and drifts of
+    /// `exempt` particles are not held to it. The pairs that fail are kept
+    /// for [`NearPairs::draw_together`].
     pub(super) fn passes(
         &mut self,
         x: &[Vec3],
@@ -591,6 +597,7 @@ impl NearPairs {
             found
         });
         self.edges.extend(blocks.into_iter().flatten());
+
         self.at.extend_from_slice(x);
         self.reach = reach;
         self.drift.zero(x.len());
