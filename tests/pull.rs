@@ -1,5 +1,6 @@
 //! A pull on one particle (the debugger's Ctrl-drag, `solver::pull`):
-//! it draws the particle towards its target, on a cloth at rest and on one
+//! it draws the particle towards its target (self-collision off and on),
+//! on a cloth at rest and on one
 //! carried by a car (the target in world coordinates, the solver in its
 //! floating origin's); a pull to where the particle already is changes
 //! nothing; and without a pull a run is what it was before pulls existed,
@@ -8,20 +9,27 @@
 use glam::DVec3;
 use proptest::prelude::*;
 use weft::scene::{Scene, Tuning, load};
-use weft::solver::{ClothSpec, Params, Pull, Solver};
+use weft::solver::{ClothSpec, Family, Params, Pull, Solver};
 
 mod common;
 use common::calm;
 
 /// An `n × n` cloth, exactly flat at rest.
 fn sheet(n: u32) -> Solver {
+    sheet_with(n, 0.0)
+}
+
+/// [`sheet`] with self-collision's weight.
+fn sheet_with(n: u32, self_collision: f32) -> Solver {
     let spec = ClothSpec {
         weft: n,
         warp: n,
         imperfection: 0.0,
         ..ClothSpec::default()
     };
-    Solver::new(spec, Params::default(), &[]).unwrap()
+    let mut params = Params::default();
+    params.weights[Family::SelfCollision] = self_collision;
+    Solver::new(spec, params, &[]).unwrap()
 }
 
 fn steps(s: &mut Solver, n: usize) {
@@ -34,17 +42,19 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 
     /// Whichever particle, wherever the target (within a metre), however
-    /// stiff the spring: the particle ends nearer its target, and the
-    /// cloth stays finite.
+    /// stiff the spring, self-collision off or on (the pulled particle
+    /// follows its pull as a driven one its body): the particle ends nearer
+    /// its target, and the cloth stays finite.
     #[test]
     fn a_pull_draws_its_particle_towards_the_target(
         particle in 0usize..64,
         offset in prop::array::uniform3(-1.0f64..1.0),
         stiffness in 0.5f32..1e4,
+        self_collision in prop::sample::select(vec![0.0f32, 1.0]),
     ) {
         let offset = DVec3::from_array(offset);
         prop_assume!(offset.length() > 0.05);
-        let mut s = sheet(8);
+        let mut s = sheet_with(8, self_collision);
         let start = s.state().position[particle].as_dvec3();
         let target = start + offset;
         s.set_pull(Some(Pull { particle, target, stiffness })).unwrap();

@@ -139,16 +139,25 @@ impl Solver {
         let rounds = if rounds { OFFSET_ROUNDS } else { 1 };
         let t = self.stopwatch();
         let exempt = self.self_contacts.tangled();
+        // A pulled particle follows its pull, as a driven one its body.
+        let inv_mass = match &self.pull {
+            Some(pull) => {
+                self.offset_inv_mass.clone_from(&self.inv_mass);
+                self.offset_inv_mass[pull.particle] = 0.0;
+                &self.offset_inv_mass
+            }
+            None => &self.inv_mass,
+        };
         let (x, triangles) = (&mut self.state.position, &self.topology.triangles);
         if !self
             .offsets
-            .path_clear(x, &self.inv_mass, triangles, &self.spec, exempt)
+            .path_clear(x, inv_mass, triangles, &self.spec, exempt)
         {
             self.offsets.find_at_start(triangles, &self.spec, exempt);
             let mut target = std::mem::take(&mut self.offset_target);
             target.clone_from(&self.state.position);
             for round in 1..=rounds {
-                let moved = self.offsets.clamp(&mut self.state.position, &self.inv_mass);
+                let moved = self.offsets.clamp(&mut self.state.position, inv_mass);
                 if moved == 0 || round == rounds {
                     break;
                 }

@@ -22,7 +22,8 @@
 //! `r`) at `X⁰` and is brought within it of where the common motion
 //! carried it ([`Offsets::clamp`]): a pair at distance `D` comes no nearer
 //! than `D − 2γD > 0`, and the balls are convex, so the straight path
-//! keeps them. Driven particles follow their bodies and are not clamped.
+//! keeps them. Driven particles follow their bodies (a pulled particle its
+//! pull) and are neither parted nor clamped.
 //! Tangled particles (a jerk drags the cloth through itself) are exempt
 //! from both: their state is not free of crossings, and holding it would
 //! hold the tangle instead of letting it come apart.
