@@ -62,9 +62,9 @@ pub(crate) const EDGE_GAP: f32 = 0.25;
 /// drift by a search made for that substep ([`Offsets::path_clear`]).
 const ALLOWANCE: f32 = 1.25;
 
-/// How many times the pairs that fail the path's test are drawn together
+/// How many times the pairs that fail the path's test are parted
 /// before every particle is bounded instead ([`Offsets::path_clear`]).
-const DRAW_ROUNDS: u32 = 4;
+const PART_ROUNDS: u32 = 4;
 
 /// How much more a driven particle weighs than a free one with the same
 /// bound in the common motion ([`Offsets::common_motion`]).
@@ -102,9 +102,10 @@ impl Offsets {
     }
 
     /// Starts a substep at `x` (free of crossings but for the `exempt`
-    /// particles): no bound yet, the near list made to pass `x` (searched
-    /// again at `x` if it does not), and the edge pairs nearer than a
-    /// quarter of the thickness found, to be kept apart.
+    /// particles): no bound yet, the near list made to hold at `x`
+    /// (searched again there if a particle has drifted too far since the
+    /// last search), and the edge pairs nearer than a quarter of the
+    /// thickness found, to be kept apart.
     pub(crate) fn begin(
         &mut self,
         x: &[Vec3],
@@ -141,9 +142,9 @@ impl Offsets {
 
     /// Whether the straight path from the substep's start to `x` is known
     /// to form no crossing (`NearPairs::passes`), searching again at the
-    /// start if the list found before it does not tell, and else drawing
-    /// the corners of the pairs that fail together, up to
-    /// [`DRAW_ROUNDS`] times.
+    /// start if a particle drifted beyond the list (allowing it this
+    /// substep's drift if it moved that far in it alone), and else parting
+    /// the pairs that approach too fast, up to [`PART_ROUNDS`] times.
     pub(crate) fn path_clear(
         &mut self,
         x: &mut [Vec3],
@@ -178,8 +179,8 @@ impl Offsets {
                 return true;
             }
         }
-        for _ in 0..DRAW_ROUNDS {
-            self.near.draw_together(x, inv_mass);
+        for _ in 0..PART_ROUNDS {
+            self.near.part_failing(x, inv_mass);
             if self.near.passes(x, &self.from, triangles, exempt) {
                 return true;
             }

@@ -21,7 +21,7 @@
 //!   against how far its corners moved in the substep, clears the path for
 //!   most pairs without a distance ([`NearPairs::passes`]); the rest are
 //!   checked along the normal between their nearest points, and parted
-//!   along it where they approach too fast ([`NearPairs::draw_together`]);
+//!   along it where they approach too fast ([`NearPairs::part_failing`]);
 //! - for the bounds, a listed pair whose lower bound is at least `r` is
 //!   farther than `r` and not measured ([`NearPairs::nearest`]).
 //!
@@ -64,8 +64,8 @@ const AHEAD_MOST: f32 = 1.0;
 const PATH_SHARE: f32 = 0.9;
 
 /// How much of it a pair that closed more is left to have closed once
-/// parted ([`NearPairs::draw_together`]).
-const DRAW_SHARE: f32 = 0.8;
+/// parted ([`NearPairs::part_failing`]).
+const PART_SHARE: f32 = 0.8;
 
 /// How far each particle has drifted since the search beyond the
 /// particles' mean motion, and each primitive's farthest corner.
@@ -325,7 +325,7 @@ impl NearPairs {
     /// of a lower bound on it, or else the plane between its nearest points
     /// at `from` still parts its corners by the rest. Pairs and drifts of
     /// `exempt` particles are not held to it. The pairs that fail are kept
-    /// for [`NearPairs::draw_together`].
+    /// for [`NearPairs::part_failing`].
     pub(super) fn passes(
         &mut self,
         x: &[Vec3],
@@ -415,12 +415,12 @@ impl NearPairs {
     /// between its nearest points at the substep's start, as an inelastic
     /// touch would: each primitive is moved whole along it, shared by
     /// mass (a primitive with a driven corner stays), until the gap is
-    /// `1 − DRAW_SHARE` of the pair's distance there. Momentum is kept.
+    /// `1 − PART_SHARE` of the pair's distance there. Momentum is kept.
     /// A pair with driven corners on both sides is left as it is.
-    pub(super) fn draw_together(&self, x: &mut [Vec3], inv_mass: &[f32]) {
+    pub(super) fn part_failing(&self, x: &mut [Vec3], inv_mass: &[f32]) {
         for f in &self.failing {
             let gap = f.corners.gap(x, f.normal);
-            let wanted = (1.0 - DRAW_SHARE) * f.distance;
+            let wanted = (1.0 - PART_SHARE) * f.distance;
             if !gap.lt(&wanted) || !f.normal.is_finite() {
                 continue;
             }
