@@ -255,9 +255,9 @@ const BOUNDED: &[(&str, f32)] = &[
 
 #[test]
 fn with_self_collision_no_shipped_preset_crosses_itself_at_any_substep() {
-    // The offset bounds (docs/method.md §11b): counted by brute force at
-    // the end of every substep. Without them the flags crossed themselves
-    // in most frames, self-collision on or off.
+    // The path check (docs/method.md §11b): counted by brute force at the
+    // end of every substep. Without it the flags crossed themselves in
+    // most frames, self-collision on or off.
     let listed: Vec<&str> = BOUNDED.iter().map(|(n, _)| *n).collect();
     for p in weft::scene::shipped::ALL {
         assert!(

@@ -218,7 +218,7 @@ const OFFSET_ROUNDS: u32 = 6;
 /// How many steps after a jerk self-collision leaves tangles alone.
 const JERK_WATCH: u32 = 60;
 
-/// How many steps, the jerk's included, the offset bounds are lifted for:
-/// the free particles follow the jerked ones, and are bounded again (but
-/// for the tangled ones) while the tangles are undone.
+/// How many steps, the jerk's included, the path check and its bounds are
+/// lifted for: the free particles follow the jerked ones, and are checked
+/// again (but for the tangled ones) while the tangles are undone.
 const JERK_UNBOUNDED: u32 = 5;
