@@ -58,10 +58,6 @@ pub(crate) const RADIUS: f32 = 0.5;
 /// apart ([`Offsets::keep_edges_apart`]).
 pub(crate) const EDGE_GAP: f32 = 0.25;
 
-/// How much farther than it moved in a substep a particle is allowed to
-/// drift by a search made for that substep ([`Offsets::path_clear`]).
-const ALLOWANCE: f32 = 1.25;
-
 /// How many times the pairs that fail the path's test are parted
 /// before every particle is bounded instead ([`Offsets::path_clear`]).
 const PART_ROUNDS: u32 = 4;
@@ -168,11 +164,7 @@ impl Offsets {
             }
         }
         if !self.near.pairs_failed() {
-            let allow: Vec<f32> = self.near.drifts().iter().map(|d| ALLOWANCE * d).collect();
-            if !self
-                .near
-                .search_allowing(&self.from, triangles, spec, &allow)
-            {
+            if !self.near.search_for_substep(&self.from, triangles, spec) {
                 return false;
             }
             if self.near.passes(x, &self.from, triangles, exempt) {

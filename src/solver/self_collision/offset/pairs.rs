@@ -58,6 +58,10 @@ const REACH: f32 = 1.0;
 const AHEAD: f32 = 4.0;
 const AHEAD_MOST: f32 = 1.0;
 
+/// How much farther than it moved in a substep a particle is allowed to
+/// drift by a search made for that substep ([`NearPairs::search_for_substep`]).
+const ALLOWANCE: f32 = 1.25;
+
 /// How much of a pair's distance at a substep's start it may close in the
 /// substep for the path to be clear ([`NearPairs::passes`]): below 1,
 /// with room for rounding.
@@ -102,36 +106,6 @@ impl Drift {
     }
 }
 
-/// A listed pair: a particle and a triangle, or two edges (indices in the
-/// list's `segments`).
-#[derive(Clone, Copy, Debug)]
-enum Pair {
-    Face(u32, u32),
-    Edge(u32, u32),
-}
-
-impl Pair {
-    /// The two primitives' particles.
-    fn corners(self, triangles: &[[u32; 3]], segments: &[[u32; 2]]) -> Corners {
-        match self {
-            Pair::Face(p, t) => {
-                let [a, b, c] = triangles[t as usize];
-                Corners {
-                    ids: [p, a, b, c],
-                    split: 1,
-                }
-            }
-            Pair::Edge(i, j) => {
-                let (e, f) = (segments[i as usize], segments[j as usize]);
-                Corners {
-                    ids: [e[0], e[1], f[0], f[1]],
-                    split: 2,
-                }
-            }
-        }
-    }
-}
-
 /// A pair's particles: one primitive's `ids[..split]`, the other's the
 /// rest.
 #[derive(Clone, Copy, Debug)]
@@ -141,6 +115,23 @@ struct Corners {
 }
 
 impl Corners {
+    /// Particle `p` and triangle `tri`.
+    fn face(p: u32, tri: [u32; 3]) -> Self {
+        let [a, b, c] = tri;
+        Self {
+            ids: [p, a, b, c],
+            split: 1,
+        }
+    }
+
+    /// Edges `e` and `f`.
+    fn edges(e: [u32; 2], f: [u32; 2]) -> Self {
+        Self {
+            ids: [e[0], e[1], f[0], f[1]],
+            split: 2,
+        }
+    }
+
     /// How far apart along `normal` the first primitive's corners are from
     /// the other's at `x`: the least of the first's against the most of
     /// the other's.
@@ -381,11 +372,10 @@ impl NearPairs {
         // points there still parts them (a degenerate triangle is left to
         // its edges).
         let failing = &mut self.failing;
-        let mut check = |pair: Pair, nearest: Option<(Vec3, Vec3)>| {
+        let mut check = |corners: Corners, nearest: Option<(Vec3, Vec3)>| {
             let Some((on_one, on_other)) = nearest else {
                 return;
             };
-            let corners = pair.corners(triangles, segments);
             let distance = on_one.distance(on_other);
             let normal = (on_one - on_other) / distance;
             let wanted = (1.0 - PATH_SHARE) * distance;
@@ -400,13 +390,17 @@ impl NearPairs {
         for &(p, t) in &self.near_faces {
             let tri = triangles[t as usize].map(|k| from[k as usize]);
             let q = closest_on_triangle(from[p as usize], tri);
-            check(Pair::Face(p, t), q.map(|q| (from[p as usize], q)));
+            let corners = Corners::face(p, triangles[t as usize]);
+            check(corners, q.map(|q| (from[p as usize], q)));
         }
         for &(i, j) in &self.near_edges {
             let (e, f) = (segments[i as usize], segments[j as usize]);
             let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| from[k as usize]);
             let (_, s, t) = closest_on_segments(u, v, a, b);
-            check(Pair::Edge(i, j), Some((u + (v - u) * s, a + (b - a) * t)));
+            check(
+                Corners::edges(e, f),
+                Some((u + (v - u) * s, a + (b - a) * t)),
+            );
         }
         self.failing.is_empty()
     }
@@ -468,10 +462,43 @@ impl NearPairs {
     ) -> bool {
         let (dx, dy) = spec.spacing();
         let most = AHEAD_MOST * REACH * dx.min(dy);
+        let moved = std::mem::take(&mut self.step.particle);
+        let found = self.search_scaled(x, triangles, spec, &moved, AHEAD, most);
+        self.step.particle = moved;
+        found
+    }
+
+    /// [`NearPairs::search`] at the substep's start `from`, after the last
+    /// [`NearPairs::holds`] found a particle drifted beyond the list in
+    /// this substep alone (the list was searched at `from`): each particle
+    /// allowed [`ALLOWANCE`] times that drift.
+    pub(super) fn search_for_substep(
+        &mut self,
+        from: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+    ) -> bool {
+        let drift = std::mem::take(&mut self.drift.particle);
+        let found = self.search_scaled(from, triangles, spec, &drift, ALLOWANCE, f32::INFINITY);
+        self.drift.particle = drift;
+        found
+    }
+
+    /// [`NearPairs::search_allowing`] each particle `factor` times its
+    /// `moved`, up to `most` (none if `moved` is not one per particle).
+    fn search_scaled(
+        &mut self,
+        x: &[Vec3],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        moved: &[f32],
+        factor: f32,
+        most: f32,
+    ) -> bool {
         let mut allow = std::mem::take(&mut self.scratch_allow);
         allow.clear();
-        if self.step.particle.len() == x.len() {
-            allow.extend(self.step.particle.iter().map(|d| (AHEAD * d).min(most)));
+        if moved.len() == x.len() {
+            allow.extend(moved.iter().map(|d| (factor * d).min(most)));
         }
         let found = self.search_allowing(x, triangles, spec, &allow);
         self.scratch_allow = allow;
@@ -481,11 +508,6 @@ impl NearPairs {
     /// A new substep starts: its start's drifts are to be found.
     pub(super) fn new_substep(&mut self) {
         self.start_known = false;
-    }
-
-    /// Each particle's drift found by the last [`NearPairs::holds`].
-    pub(super) fn drifts(&self) -> &[f32] {
-        &self.drift.particle
     }
 
     /// Whether the last search was made at `x`.
@@ -503,7 +525,7 @@ impl NearPairs {
     /// farther before the list no longer holds (none if `allow` is
     /// empty): a pair is listed if it is nearer than the reach plus the
     /// largest allowance among each primitive's corners.
-    pub(super) fn search_allowing(
+    fn search_allowing(
         &mut self,
         x: &[Vec3],
         triangles: &[[u32; 3]],
