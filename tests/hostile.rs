@@ -209,9 +209,15 @@ fn large_grids_are_warned_about_with_an_estimate() {
     }
     let big = ["cloth.weft=512", "cloth.warp=512"];
     let loaded = load::load("hanging_sheet", &sets(&big)).unwrap();
-    let [warning] = loaded.warnings.as_slice() else {
+    // Self-collision is on by default, and 4 mm is more than half a
+    // 512 × 512 grid's spacing: the thickness is warned about too.
+    let [warning, thickness] = loaded.warnings.as_slice() else {
         panic!("{:?}", loaded.warnings)
     };
+    assert!(
+        thickness.contains("cloth.thickness = 0.004 m") && thickness.contains("up to 0.0010 m"),
+        "{thickness}"
+    );
     assert!(
         warning.contains("512 × 512") && warning.contains("per frame"),
         "{warning}"

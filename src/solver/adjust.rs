@@ -16,6 +16,11 @@
 //! time from the end of one section to the end of the next, barriers
 //! included, which is the wall time the section costs the step.
 //!
+//! With self-contacts, friction between layers runs once, before the last
+//! sweep (after the only one), on thread 0 while the others wait: the
+//! contacts' pushes so far bound it, and the sweep after it mends what
+//! holding a particle back does to its edges ([`LayerFriction`]).
+//!
 //! In the step's last phase, with corrections asked for, every thread also
 //! credits each family's sweep (stretch's consecutive passes once, after
 //! the last) with what it did to the thread's share of the particles
@@ -23,10 +28,13 @@
 
 use std::time::{Duration, Instant};
 
+use glam::Vec3;
+
 use super::collision::{self, Collider, Contact, Pose};
 use super::diagnostics::{CorrectionTrack, Diagnostics, LargestTurn, Tracking};
 use super::families::{Family, PerFamily, SharedMultipliers, Sweep};
 use super::kernels::{NoRecord, Recorder, Shared};
+use super::self_collision::{self, SelfContact};
 use super::team::{self, Crew};
 
 /// Everything one adjust phase reads and writes.
@@ -39,6 +47,16 @@ pub(crate) struct Adjust<'a> {
     pub iterations: u32,
     /// The colliders, if there are any.
     pub colliders: Option<Colliders<'a>>,
+    /// Friction between layers, if it is on and there are self-contacts.
+    pub friction: Option<LayerFriction<'a>>,
+}
+
+/// Friction between layers (`self_collision::apply_friction`): the
+/// self-contacts, each particle at the substep's start, and `μ`.
+pub(crate) struct LayerFriction<'a> {
+    pub contacts: &'a [SelfContact],
+    pub start: &'a [Vec3],
+    pub friction: f32,
 }
 
 /// The colliders at the substep's end, and each particle's deepest contact.
@@ -106,7 +124,14 @@ impl Adjust<'_> {
         let forks = team::run(threads, |crew| {
             let mut recs = recorders.map(|_, r| r.fork());
             let mut clock = (timed && crew.index() == 0).then(Clock::new);
-            for _ in 0..self.iterations {
+            for sweep in 0..self.iterations {
+                if self.iterations > 1 && sweep + 1 == self.iterations {
+                    self.hold_layers(crew, tracking);
+                    if let Some(c) = clock.as_mut() {
+                        let t = c.lap();
+                        c.times.families[Family::SelfCollision] += t;
+                    }
+                }
                 for family in Family::ALL {
                     // Families with weight 0 are skipped.
                     if self.sweep.weights[family] == 0.0 {
@@ -133,6 +158,13 @@ impl Adjust<'_> {
                     }
                 }
             }
+            if self.iterations == 1 {
+                self.hold_layers(crew, tracking);
+                if let Some(c) = clock.as_mut() {
+                    let t = c.lap();
+                    c.times.families[Family::SelfCollision] += t;
+                }
+            }
             if let Some(t) = tracking {
                 t.finish(crew);
             }
@@ -148,6 +180,27 @@ impl Adjust<'_> {
             }
         }
         times
+    }
+
+    /// Friction between layers, on thread 0 in contact order while the
+    /// others wait (a move `tracking` credits to no family).
+    fn hold_layers(&self, crew: &Crew, tracking: Option<&Tracking>) {
+        let Some(f) = &self.friction else {
+            return;
+        };
+        let p = self.sweep.p;
+        if crew.index() == 0 {
+            let mu = self.mu.self_contacts();
+            // SAFETY: the other threads wait at the barrier below, touching
+            // neither the positions nor the multipliers until then.
+            let (x, mu) = unsafe { (p.x.slice(0..p.inv_mass.len()), mu.slice(0..mu.len())) };
+            self_collision::apply_friction(x, f.start, p.inv_mass, f.contacts, mu, f.friction);
+        }
+        crew.barrier();
+        if let Some(t) = tracking {
+            t.skip(crew, p);
+        }
+        crew.barrier();
     }
 
     /// Pushes this thread's share of the particles out of every collider

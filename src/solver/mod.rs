@@ -19,7 +19,7 @@
 //!    Each weight is a compliance (XPBD), so its effect does not depend on
 //!    iterations, substeps or resolution ([`params::Weights`]); rotations
 //!    are shaped by Eq. 3 ([`forced_rotation`]). The last family,
-//!    self-collision (off by default), keeps the cloth's layers apart
+//!    self-collision (on by default), keeps the cloth's layers apart
 //!    ([`self_collision`]). Colliders are projected after each
 //!    sweep, friction once at the end ([`collision`]).
 //!

@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 
-use super::adjust::{Adjust, Colliders};
+use super::adjust::{Adjust, Colliders, LayerFriction};
 use super::collision::{self, Contact, Pose};
 use super::diagnostics;
 use super::families::{Family, Sets, Sweep};
@@ -13,9 +13,7 @@ use super::forced_rotation::ForcedRotation;
 use super::frame::{Frame, FrameStep};
 use super::kernels::{Particles, Shared};
 use super::update::{self, Environment, FrameMotion, Reference};
-use super::{
-    ClothState, NonFinite, PARALLEL_MIN_PARTICLES, Solver, StepError, self_collision, team,
-};
+use super::{ClothState, NonFinite, PARALLEL_MIN_PARTICLES, Solver, StepError, team};
 
 impl Solver {
     /// Advances by `Δt`: the bodies move from their current poses to `bodies`.
@@ -242,22 +240,19 @@ impl Solver {
                 margin: 0.5 * self.spec.thickness,
                 contacts: Shared::new(&mut self.contacts),
             }),
+            friction: (!self.self_contacts.set.is_empty() && self.spec.friction > 0.0).then(|| {
+                LayerFriction {
+                    contacts: &self.self_contacts.set.items,
+                    start: &self.state.prev_position,
+                    friction: self.spec.friction,
+                }
+            }),
         };
         adjust.run(
             threads,
             self.diagnostics.as_deref_mut(),
             last.then_some(&mut self.track),
         );
-        if !self.self_contacts.set.is_empty() {
-            self_collision::apply_friction(
-                &mut self.state.position,
-                &self.state.prev_position,
-                &self.inv_mass,
-                &self.self_contacts.set.items,
-                &self.multipliers.self_collision,
-                self.spec.friction,
-            );
-        }
         let margin = 0.5 * self.spec.thickness;
         if !self.colliders.is_empty() {
             collision::apply_friction(
@@ -275,6 +270,9 @@ impl Solver {
         if bounded {
             self.keep_edges_apart();
             self.clamp_to_offsets(true);
+            // Parting the layers may have moved a particle into a collider:
+            // the colliders have the last word.
+            self.project_colliders(margin);
         }
         // Turns leave quaternions unit to rounding only; renormalise once.
         for q in &mut self.state.orientation {

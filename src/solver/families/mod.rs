@@ -56,7 +56,7 @@ use super::diagnostics::Violation;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
 use super::forced_rotation::ForcedRotation as Eq3;
-use super::kernels::{Particles, Recorder};
+use super::kernels::{Particles, Recorder, Shared};
 use super::params::compliance_factor;
 use super::self_collision::SelfContact;
 use super::team::Crew;
@@ -166,6 +166,13 @@ impl Sweep<'_> {
 pub(crate) fn zero<T: Default + Clone>(v: &mut Vec<T>, n: usize) {
     v.clear();
     v.resize(n, T::default());
+}
+
+impl<'a> SharedMultipliers<'a> {
+    /// The self-contacts' multipliers, for friction between layers.
+    pub(crate) fn self_contacts(&self) -> &Shared<'a, f32> {
+        &self.self_collision
+    }
 }
 
 /// Makes [`Family`] and the per-family dispatch from the list of families.

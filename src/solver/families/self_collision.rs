@@ -18,9 +18,10 @@ pub struct SelfCollision;
 impl ConstraintFamily for SelfCollision {
     const NAME: &'static str = "self";
     const COLOR: [u8; 3] = [200, 90, 220];
-    /// Off: a contact search every substep is the dearest part of a step
-    /// (see docs/method.md, "Self-collision").
-    const DEFAULT_WEIGHT: f32 = 0.0;
+    /// On: a cloth that passes through itself is what a person notices
+    /// first, though the path check and the contacts are the dearest part
+    /// of a step (see docs/method.md, §11b, "Limits, and the default").
+    const DEFAULT_WEIGHT: f32 = 1.0;
     const TURNS: bool = false;
     /// The reference compliance `α_ref` (at `λ = ½`) of self-contacts, m/N:
     /// how far a pressed layer gives into the thickness (1 mm per newton at
