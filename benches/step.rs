@@ -46,6 +46,12 @@ fn weft_sheet(n: u32, weights: Weights) -> Solver {
     s
 }
 
+/// The default weights with self-collision off: the peer has none, and the
+/// step and thread benchmarks measure the paper's families.
+fn without_self_collision() -> Weights {
+    Weights::default_weights().with(Family::SelfCollision, 0.0)
+}
+
 /// The peer: rapier-cloth-core's XPBD solver, same grid, pins, iterations, Δt.
 struct Peer {
     cloth: rapier_cloth_core::Cloth,
@@ -96,7 +102,7 @@ fn step_by_size(c: &mut Criterion) {
     g.sample_size(20);
     for n in [32u32, 64, 128, 256] {
         g.throughput(Throughput::Elements((n * n) as u64));
-        let mut s = weft_sheet(n, Weights::default_weights());
+        let mut s = weft_sheet(n, without_self_collision());
         g.bench_with_input(BenchmarkId::new("weft", n), &n, |b, _| {
             b.iter(|| s.step(&Environment::default(), &[Pose::IDENTITY]).unwrap())
         });
@@ -117,7 +123,7 @@ fn threads(c: &mut Criterion) {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            let mut s = pool.install(|| weft_sheet(n, Weights::default_weights()));
+            let mut s = pool.install(|| weft_sheet(n, without_self_collision()));
             g.bench_with_input(
                 BenchmarkId::new(format!("weft {n}x{n}"), threads),
                 &threads,
@@ -207,6 +213,7 @@ fn telemetry(c: &mut Criterion) {
             "cloth.warp=64",
             "solver.substeps=1",
             "solver.iterations=10",
+            "solver.weights.self=0",
             &format!("telemetry.level=\"{level}\""),
         ]
         .iter()

@@ -223,6 +223,10 @@ fn large_grids_are_warned_about_with_an_estimate() {
         "{warning}"
     );
     assert!(warning.contains("min for the 10 s duration"), "{warning}");
+    assert!(
+        warning.contains("self-collision is 2.1 s of that"),
+        "{warning}"
+    );
 
     let out = Command::new(env!("CARGO_BIN_EXE_weft"))
         .args(["check", "hanging_sheet", "--set", big[0], "--set", big[1]])

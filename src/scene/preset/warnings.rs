@@ -17,6 +17,13 @@ const MIN_THICKNESS_PER_SPACING: f32 = 0.01;
 /// hanging_sheet --set cloth.weft=512 --set cloth.warp=512`, this machine's
 /// 2 cores, dev profile), rounded up.
 const SECONDS_PER_PARTICLE_PASS: f64 = 5e-7;
+/// Rough cost of self-collision (the path check, its list, the contacts and
+/// their measures) per particle and substep, in seconds, with a thickness
+/// the grid can fold: measured at 128 × 128 and 256 × 256 (`weft record
+/// hanging_sheet --set cloth.weft=256 --set cloth.warp=256 --set
+/// cloth.thickness=0.001`, with `solver.weights.self` 1 and 0, 2 cores, dev
+/// profile: 1.0 and 1.7 µs), rounded up.
+const SELF_SECONDS_PER_PARTICLE_SUBSTEP: f64 = 2e-6;
 /// A frame estimated to take longer than this gets a warning, in seconds
 /// (the shipped presets take milliseconds).
 const SLOW_FRAME: f64 = 0.5;
@@ -46,7 +53,7 @@ impl Preset {
         );
         if c.thickness > hi {
             Some(format!(
-                "cloth.thickness = {} m is more than half the grid's spacing ({spacing:.4} m): self-collision then holds every fold at least that far open, wider than the grid can bend, so the cloth folds as if stiff; use a thickness up to {hi:.4} m, or a finer grid",
+                "cloth.thickness = {} m is more than half the grid's spacing ({spacing:.4} m): self-collision then holds every fold at least that far open, wider than the grid can bend, so the cloth folds as if stiff, and keeps every particle in contact with its neighbours' triangles, which makes each step many times dearer; use a thickness up to {hi:.4} m, or a finer grid",
                 c.thickness
             ))
         } else if c.thickness < lo {
@@ -64,13 +71,27 @@ impl Preset {
         let (c, s) = (&self.cloth, &self.solver);
         let particles = c.weft as f64 * c.warp as f64;
         let passes = s.substeps as f64 * (1.0 + s.iterations as f64);
-        let frame = particles * passes * SECONDS_PER_PARTICLE_PASS;
+        let self_on = s.weights[Family::SelfCollision] > 0.0;
+        let contacts = if self_on {
+            particles * s.substeps as f64 * SELF_SECONDS_PER_PARTICLE_SUBSTEP
+        } else {
+            0.0
+        };
+        let frame = particles * passes * SECONDS_PER_PARTICLE_PASS + contacts;
         if frame < SLOW_FRAME {
             return None;
         }
         let frames = (self.duration as f64 / s.dt as f64).ceil();
+        let advice = if self_on {
+            format!(
+                "; self-collision is {} of that (solver.weights.self = 0 turns it off where the layers never meet)",
+                seconds(contacts)
+            )
+        } else {
+            String::new()
+        };
         Some(format!(
-            "a {} × {} cloth ({particles} particles) with {} substeps × {} iterations is far larger than the shipped presets (at most 32 × 32): expect roughly {} per frame, the first one included, and {} for the {} s duration",
+            "a {} × {} cloth ({particles} particles) with {} substeps × {} iterations is far larger than the shipped presets (at most 32 × 32): expect roughly {} per frame, the first one included, and {} for the {} s duration{advice}",
             c.weft,
             c.warp,
             s.substeps,
