@@ -126,11 +126,7 @@ impl Adjust<'_> {
             let mut clock = (timed && crew.index() == 0).then(Clock::new);
             for sweep in 0..self.iterations {
                 if self.iterations > 1 && sweep + 1 == self.iterations {
-                    self.hold_layers(crew, tracking);
-                    if let Some(c) = clock.as_mut() {
-                        let t = c.lap();
-                        c.times.families[Family::SelfCollision] += t;
-                    }
+                    self.hold_layers(crew, tracking, clock.as_mut());
                 }
                 for family in Family::ALL {
                     // Families with weight 0 are skipped.
@@ -159,11 +155,7 @@ impl Adjust<'_> {
                 }
             }
             if self.iterations == 1 {
-                self.hold_layers(crew, tracking);
-                if let Some(c) = clock.as_mut() {
-                    let t = c.lap();
-                    c.times.families[Family::SelfCollision] += t;
-                }
+                self.hold_layers(crew, tracking, clock.as_mut());
             }
             if let Some(t) = tracking {
                 t.finish(crew);
@@ -183,8 +175,9 @@ impl Adjust<'_> {
     }
 
     /// Friction between layers, on thread 0 in contact order while the
-    /// others wait (a move `tracking` credits to no family).
-    fn hold_layers(&self, crew: &Crew, tracking: Option<&Tracking>) {
+    /// others wait (a move `tracking` credits to no family; `clock` times
+    /// it with self-collision).
+    fn hold_layers(&self, crew: &Crew, tracking: Option<&Tracking>, clock: Option<&mut Clock>) {
         let Some(f) = &self.friction else {
             return;
         };
@@ -201,6 +194,10 @@ impl Adjust<'_> {
             t.skip(crew, p);
         }
         crew.barrier();
+        if let Some(c) = clock {
+            let t = c.lap();
+            c.times.families[Family::SelfCollision] += t;
+        }
     }
 
     /// Pushes this thread's share of the particles out of every collider

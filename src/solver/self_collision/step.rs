@@ -154,8 +154,12 @@ impl Solver {
             .path_clear(x, inv_mass, triangles, &self.spec, exempt)
         {
             self.offsets.find_at_start(triangles, &self.spec, exempt);
+            // Where the sweeps took the particles, to go on towards after
+            // each round but the last.
             let mut target = std::mem::take(&mut self.offset_target);
-            target.clone_from(&self.state.position);
+            if rounds > 1 {
+                target.clone_from(&self.state.position);
+            }
             for round in 1..=rounds {
                 let moved = self.offsets.clamp(&mut self.state.position, inv_mass);
                 if moved == 0 || round == rounds {

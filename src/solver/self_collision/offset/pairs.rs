@@ -187,7 +187,6 @@ pub(super) struct NearPairs {
     drift_from: Drift,
     /// Scratch: each particle's move in the substep beyond their mean.
     step: Drift,
-    scratch_allow: Vec<f32>,
     /// Whether `drift_from` is the substep's start's.
     start_known: bool,
     /// The mesh's edges, in the order the list refers to them by.
@@ -495,14 +494,12 @@ impl NearPairs {
         factor: f32,
         most: f32,
     ) -> bool {
-        let mut allow = std::mem::take(&mut self.scratch_allow);
-        allow.clear();
+        self.allow.clear();
         if moved.len() == x.len() {
-            allow.extend(moved.iter().map(|d| (factor * d).min(most)));
+            self.allow
+                .extend(moved.iter().map(|d| (factor * d).min(most)));
         }
-        let found = self.search_allowing(x, triangles, spec, &allow);
-        self.scratch_allow = allow;
-        found
+        self.search_allowing(x, triangles, spec)
     }
 
     /// A new substep starts: its start's drifts are to be found.
@@ -518,23 +515,17 @@ impl NearPairs {
     /// Finds every pair nearer than the reach at `x` (a state free of
     /// crossings). Returns false if a position is not finite.
     pub(super) fn search(&mut self, x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> bool {
-        self.search_allowing(x, triangles, spec, &[])
+        self.allow.clear();
+        self.search_allowing(x, triangles, spec)
     }
 
-    /// [`NearPairs::search`], each particle allowed to drift `allow[i]`
-    /// farther before the list no longer holds (none if `allow` is
-    /// empty): a pair is listed if it is nearer than the reach plus the
-    /// largest allowance among each primitive's corners.
-    fn search_allowing(
-        &mut self,
-        x: &[Vec3],
-        triangles: &[[u32; 3]],
-        spec: &ClothSpec,
-        allow: &[f32],
-    ) -> bool {
+    /// [`NearPairs::search`], each particle allowed to drift `self.allow[i]`
+    /// farther before the list no longer holds (none past the end of
+    /// `allow`, which the caller fills): a pair is listed if it is nearer
+    /// than the reach plus the largest allowance among each primitive's
+    /// corners.
+    fn search_allowing(&mut self, x: &[Vec3], triangles: &[[u32; 3]], spec: &ClothSpec) -> bool {
         self.start_known = false;
-        self.allow.clear();
-        self.allow.extend_from_slice(allow);
         self.allow.resize(x.len(), 0.0);
         self.at.clear();
         self.faces.clear();
