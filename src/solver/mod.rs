@@ -178,9 +178,9 @@ pub struct Solver {
     offsets: Offsets,
     /// Scratch: where the sweeps took the particles, while they are clamped.
     offset_target: Vec<Vec3>,
-    /// Scratch: the inverse masses self-collision's path check sees, a
-    /// pulled particle's 0 (it follows its pull as a driven one its body).
-    offset_inv_mass: Vec<f32>,
+    /// Scratch: which particles the clamp to the offsets may move (nonzero),
+    /// a pulled particle not ([`Solver::clamp_to_offsets`]).
+    offset_held: Vec<f32>,
     /// Substeps left that a jerk leaves unbounded ([`Solver::watch_for_jerks`]).
     unbounded: u32,
     rest_position: Vec<Vec3>,
@@ -230,7 +230,7 @@ impl Solver {
             self_contacts: SelfContacts::default(),
             offsets: Offsets::default(),
             offset_target: Vec::new(),
-            offset_inv_mass: Vec::new(),
+            offset_held: Vec::new(),
             unbounded: 0,
             rest_position: (0..spec.warp)
                 .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))

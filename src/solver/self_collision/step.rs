@@ -139,19 +139,21 @@ impl Solver {
         let rounds = if rounds { OFFSET_ROUNDS } else { 1 };
         let t = self.stopwatch();
         let exempt = self.self_contacts.tangled();
-        // A pulled particle follows its pull, as a driven one its body.
-        let inv_mass = match &self.pull {
+        // A pulled particle is one of the cloth's, pushed and parted by
+        // its mass like any other, but the clamp leaves it where its pull
+        // took it: held back to its bound a grab would barely follow.
+        let held = match &self.pull {
             Some(pull) => {
-                self.offset_inv_mass.clone_from(&self.inv_mass);
-                self.offset_inv_mass[pull.particle] = 0.0;
-                &self.offset_inv_mass
+                self.offset_held.clone_from(&self.inv_mass);
+                self.offset_held[pull.particle] = 0.0;
+                &self.offset_held
             }
             None => &self.inv_mass,
         };
         let (x, triangles) = (&mut self.state.position, &self.topology.triangles);
         if !self
             .offsets
-            .path_clear(x, inv_mass, triangles, &self.spec, exempt)
+            .path_clear(x, &self.inv_mass, triangles, &self.spec, exempt)
         {
             self.offsets.find_at_start(triangles, &self.spec, exempt);
             // Where the sweeps took the particles, to go on towards after
@@ -161,7 +163,9 @@ impl Solver {
                 target.clone_from(&self.state.position);
             }
             for round in 1..=rounds {
-                let moved = self.offsets.clamp(&mut self.state.position, inv_mass);
+                let moved = self
+                    .offsets
+                    .clamp(&mut self.state.position, &self.inv_mass, held);
                 if moved == 0 || round == rounds {
                     break;
                 }

@@ -22,8 +22,10 @@
 //! `r`) at `X⁰` and is brought within it of where the common motion
 //! carried it ([`Offsets::clamp`]): a pair at distance `D` comes no nearer
 //! than `D − 2γD > 0`, and the balls are convex, so the straight path
-//! keeps them. Driven particles follow their bodies (a pulled particle its
-//! pull) and are neither parted nor clamped.
+//! keeps them. Driven particles follow their bodies and are neither parted
+//! nor clamped. A pulled particle is parted by its mass like any other but
+//! not clamped: it follows its pull (and where that takes it beyond its
+//! bound, the cloth is no longer known to be free of crossings).
 //! Tangled particles (a jerk drags the cloth through itself) are exempt
 //! from both: their state is not free of crossings, and holding it would
 //! hold the tangle instead of letting it come apart.
@@ -241,10 +243,13 @@ impl Offsets {
     /// Brings every free particle at `x` back within its bound of where
     /// the particles' mean displacement since the bounds were found
     /// carried it.
-    /// A driven particle beyond its bound is left where its body holds it,
-    /// and the cloth is no longer known to be free of crossings.
+    /// `inv_mass` is zero for the particles a body drives, `held` also for
+    /// a pulled one: a particle of no `held` mass beyond its bound is left
+    /// where its body (or its pull) took it, and the cloth is no longer
+    /// known to be free of crossings. Only the driven ones weigh more in
+    /// the mean: a pulled particle goes its own way, not the cloth's.
     /// Returns how many free particles it moved.
-    pub(crate) fn clamp(&mut self, x: &mut [Vec3], inv_mass: &[f32]) -> usize {
+    pub(crate) fn clamp(&mut self, x: &mut [Vec3], inv_mass: &[f32], held: &[f32]) -> usize {
         let mut moved = 0;
         if self.start.len() != x.len() {
             return moved;
@@ -253,8 +258,7 @@ impl Offsets {
         if !t.is_finite() {
             return moved;
         }
-        for (((now, &then), &b), &w) in x.iter_mut().zip(&self.start).zip(&self.bound).zip(inv_mass)
-        {
+        for (((now, &then), &b), &w) in x.iter_mut().zip(&self.start).zip(&self.bound).zip(held) {
             if b == f32::INFINITY {
                 continue;
             }
