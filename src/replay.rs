@@ -28,9 +28,33 @@ pub struct Replayed {
     /// world coordinates, with other rounding, so this one cannot
     /// reproduce it bit for bit.
     pub before_floating_origin: bool,
+    /// The solver revision that made the recording, if it names one
+    /// ([`crate::solver::REVISION`]).
+    pub solver_revision: Option<u32>,
 }
 
 impl Replayed {
+    /// Why a recording that did not reproduce could not, as far as can be
+    /// told: the weft that made it computed otherwise. `None` when it was
+    /// made by this solver revision (then a mismatch is a fault of
+    /// determinism).
+    pub fn why_not(&self) -> Option<String> {
+        let now = crate::solver::REVISION;
+        if self.before_floating_origin {
+            Some("it was made by a weft from before the floating origin, which simulated in world coordinates with other rounding".into())
+        } else {
+            match self.solver_revision {
+                Some(then) if then == now => None,
+                Some(then) => Some(format!(
+                    "it was made by solver revision {then}, and this weft's solver, revision {now}, steps the same preset and parameters differently"
+                )),
+                None => Some(format!(
+                    "it was made by a weft from before recordings named their solver revision, whose solver may step the same preset and parameters differently from this one (revision {now})"
+                )),
+            }
+        }
+    }
+
     /// Whether everything that could be compared matched.
     pub fn reproduced(&self) -> bool {
         self.recorded_digest
@@ -100,6 +124,7 @@ pub enum ReplayError {
 /// Re-runs the recording at `path`.
 pub fn replay(path: &Path) -> Result<Replayed, ReplayError> {
     let rec = read::read(path)?;
+    let solver_revision = rec.solver_revision();
     let text = rec
         .preset
         .ok_or_else(|| ReplayError::NoPreset { path: path.into() })?;
@@ -164,12 +189,53 @@ pub fn replay(path: &Path) -> Result<Replayed, ReplayError> {
         changes: changes.len().saturating_sub(1),
         truncated: rec.truncated,
         before_floating_origin,
+        solver_revision,
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_replay_that_differs_says_which_solver_made_the_recording() {
+        let rec = read::Recording {
+            version: Some("weft 0.1.0 (solver revision 7)".into()),
+            ..read::Recording::default()
+        };
+        assert_eq!(rec.solver_revision(), Some(7));
+        let old = read::Recording {
+            version: Some("weft 0.1.0".into()),
+            ..read::Recording::default()
+        };
+        assert_eq!(old.solver_revision(), None);
+
+        let now = crate::solver::REVISION;
+        let replayed = |solver_revision, before_floating_origin| Replayed {
+            frames: 1,
+            digest: "a".into(),
+            recorded_digest: Some("b".into()),
+            positions_match: None,
+            changes: 0,
+            truncated: false,
+            before_floating_origin,
+            solver_revision,
+        };
+        assert_eq!(replayed(Some(now), false).why_not(), None);
+        let other = replayed(Some(now + 1), false).why_not().unwrap();
+        assert!(
+            other.contains(&format!("solver revision {}", now + 1)),
+            "{other}"
+        );
+        assert!(other.contains(&format!("revision {now}")), "{other}");
+        let unnamed = replayed(None, false).why_not().unwrap();
+        assert!(
+            unnamed.contains("before recordings named their solver revision"),
+            "{unnamed}"
+        );
+        let world = replayed(None, true).why_not().unwrap();
+        assert!(world.contains("floating origin"), "{world}");
+    }
 
     #[test]
     fn a_family_missing_from_stored_parameters_was_off() {

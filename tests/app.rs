@@ -311,7 +311,7 @@ fn each_run_is_its_own_recording() {
         rec.properties
     );
     assert_eq!(prop("__properties/weft:preset"), "hanging_sheet");
-    assert_eq!(prop("__properties/weft:version"), env!("CARGO_PKG_VERSION"));
+    assert_eq!(prop("__properties/weft:version"), weft::solver::version());
     assert_eq!(prop("__properties/weft:changes"), "curvature 0.1→0.35");
     assert_eq!(prop("__properties/result:frames"), "3");
     assert_eq!(prop("__properties/result:verdict"), "ok");

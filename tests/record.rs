@@ -612,6 +612,8 @@ fn replay_reproduces_the_final_state_bit_for_bit() {
     assert_eq!(replayed.digest, figures.final_state);
     assert_eq!(replayed.positions_match, Some(true));
     assert!(replayed.reproduced());
+    assert_eq!(replayed.solver_revision, Some(weft::solver::REVISION));
+    assert_eq!(replayed.why_not(), None);
 
     // The changes matter: without them the run ends elsewhere.
     let plain = record_to(
@@ -853,4 +855,42 @@ fn a_recording_carries_its_layout() {
     assert_eq!(legends, 6, "one legend setting per plot");
     let activation = activation.expect("the layout is activated");
     assert!(activation.make_default && !activation.make_active);
+}
+
+/// The solver's results at [`weft::solver::REVISION`]: a shipped preset with
+/// self-collision on, and a pulled sheet folding over itself. A change that
+/// moves either must raise the revision (and pin these again), so that
+/// `weft replay` can tell a recording made by another solver from a fault.
+#[test]
+fn the_solver_revision_names_its_results() {
+    let pinned = (1, "903b0e38c78fda68", "cf656ffc3c3d95ec");
+    let preset = load::load("windy_flag", &[]).unwrap().preset;
+    let mut scene = Scene::new(&preset).unwrap();
+    for _ in 0..60 {
+        scene.step().unwrap();
+    }
+    let flag = format!("{:016x}", scene.solver().state().digest());
+    let spec = weft::solver::ClothSpec {
+        weft: 8,
+        warp: 8,
+        imperfection: 0.01,
+        ..weft::solver::ClothSpec::default()
+    };
+    let mut sheet = weft::solver::Solver::new(spec, weft::solver::Params::default(), &[]).unwrap();
+    let corner = sheet.state().position[7].as_dvec3();
+    let pull = weft::solver::Pull {
+        particle: 7,
+        target: corner + glam::DVec3::new(0.0, 0.8, 0.1),
+        stiffness: 20.0,
+    };
+    sheet.set_pull(Some(pull)).unwrap();
+    for _ in 0..30 {
+        sheet.step(&common::calm(), &[]).unwrap();
+    }
+    let folded = format!("{:016x}", sheet.state().digest());
+    assert_eq!(
+        (weft::solver::REVISION, flag.as_str(), folded.as_str()),
+        pinned,
+        "the results changed: raise weft::solver::REVISION and pin the new digests"
+    );
 }

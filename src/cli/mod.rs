@@ -237,11 +237,16 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 Ok(ExitCode::SUCCESS)
             } else {
                 outln!("NOT reproduced");
-                if r.before_floating_origin {
-                    outln!(
-                        "{} was made by a weft from before the floating origin, which simulated in world coordinates with other rounding; this weft cannot reproduce it bit for bit (record it again to replay it)",
+                match r.why_not() {
+                    Some(why) => outln!(
+                        "{}: {why}; this weft cannot reproduce it bit for bit (record it again to replay it)",
                         file.display()
-                    );
+                    ),
+                    None => outln!(
+                        "{} was made by this solver revision ({}): the same preset and parameters should step to the same state, so this is a fault of weft's determinism; please report it with the file",
+                        file.display(),
+                        crate::solver::REVISION
+                    ),
                 }
                 Ok(ExitCode::FAILURE)
             }

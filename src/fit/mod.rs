@@ -309,7 +309,7 @@ impl Fit {
     /// The manifest of this fit.
     pub fn manifest(&self) -> Manifest {
         Manifest {
-            weft: env!("CARGO_PKG_VERSION").into(),
+            weft: crate::solver::version(),
             preset: self.preset.clone(),
             set: self
                 .base
@@ -446,7 +446,8 @@ pub struct Distance {
 /// `fit.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
-    /// The weft version that wrote it.
+    /// The weft that wrote it, with its solver revision
+    /// ([`crate::solver::version`]): points of another solver are not mixed in.
     pub weft: String,
     /// The preset.
     pub preset: String,

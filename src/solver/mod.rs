@@ -71,6 +71,20 @@ pub use pull::Pull;
 pub use topology::Topology;
 pub use update::Environment;
 
+/// Which results this solver gives: raised whenever a change makes the
+/// same preset and parameters step to a different state. A recording names
+/// the revision that made it, so that a replay by another revision can say
+/// why it does not reproduce (`weft replay`). The test
+/// `the_solver_revision_names_its_results` (`tests/record.rs`) pins the
+/// results of this one, so a change of results cannot land without it.
+pub const REVISION: u32 = 1;
+
+/// This weft and its solver's results, `0.1.0 (solver revision 1)`:
+/// recordings, sweeps and fits are stamped with it.
+pub fn version() -> String {
+    format!("{} (solver revision {REVISION})", env!("CARGO_PKG_VERSION"))
+}
+
 use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec3};

@@ -96,7 +96,8 @@ impl std::fmt::Debug for Measurement {
 /// The manifest, `sweep.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
-    /// The weft version that wrote it.
+    /// The weft that wrote it, with its solver revision
+    /// ([`crate::solver::version`]): points of another solver are not mixed in.
     pub weft: String,
     /// The preset.
     pub preset: String,
@@ -235,7 +236,7 @@ impl Plan {
     /// The manifest of this plan.
     pub fn manifest(&self) -> Manifest {
         Manifest {
-            weft: env!("CARGO_PKG_VERSION").into(),
+            weft: crate::solver::version(),
             preset: self.preset.clone(),
             frames: self.frames,
             seconds: self.seconds,

@@ -248,7 +248,7 @@ impl Telemetry {
         rec.log_static(paths::WORLD, &rerun::ViewCoordinates::RIGHT_HAND_Z_UP())?;
         rec.log_static(
             paths::VERSION,
-            &rerun::TextDocument::new(format!("weft {}", env!("CARGO_PKG_VERSION"))),
+            &rerun::TextDocument::new(format!("weft {}", crate::solver::version())),
         )?;
         rec.log_static(
             paths::PRESET,

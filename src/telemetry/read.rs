@@ -54,6 +54,8 @@ pub struct Recording {
     pub entities: BTreeMap<String, EntityInfo>,
     /// The resolved preset.
     pub preset: Option<String>,
+    /// The weft that made it (`weft 0.1.0 (solver revision 1)`).
+    pub version: Option<String>,
     /// Parameter sets (TOML) by the frame they took effect.
     pub params: Vec<(i64, String)>,
     /// Event messages by frame.
@@ -95,6 +97,14 @@ impl Recording {
             .get(path)
             .map(|e| e.frames.iter().copied().collect())
             .unwrap_or_default()
+    }
+
+    /// The solver revision that made it ([`crate::solver::REVISION`]), if
+    /// its weft named one.
+    pub fn solver_revision(&self) -> Option<u32> {
+        let version = self.version.as_deref()?;
+        let (_, rest) = version.split_once("(solver revision ")?;
+        rest.strip_suffix(')')?.parse().ok()
     }
 }
 
@@ -254,6 +264,7 @@ fn recording(engine: &QueryEngine<StorageEngine>) -> Recording {
         let info = entity_info(engine, &entity, &mut out.sim_time);
         match path.as_str() {
             paths::PRESET => out.preset = texts(engine, &entity, &info).pop().map(|(_, t)| t),
+            paths::VERSION => out.version = texts(engine, &entity, &info).pop().map(|(_, t)| t),
             paths::SUMMARY => out.summary = texts(engine, &entity, &info).pop().map(|(_, t)| t),
             paths::PARAMS => out.params = texts(engine, &entity, &info),
             paths::EVENTS => out.events = texts(engine, &entity, &info),

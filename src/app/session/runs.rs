@@ -199,10 +199,7 @@ pub(super) fn open(
         .unwrap_or_default();
     info.name = name.clone();
     let mut props = rerun::AnyValues::default()
-        .with_component::<rerun::components::Text>(
-            "version",
-            [env!("CARGO_PKG_VERSION").to_string()],
-        )
+        .with_component::<rerun::components::Text>("version", [crate::solver::version()])
         .with_component::<rerun::components::Text>("preset", [preset_name.to_string()])
         .with_component::<rerun::components::Text>("run", [info.number.to_string()])
         .with_component::<rerun::components::Text>("changes", [changes]);
