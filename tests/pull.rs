@@ -121,13 +121,13 @@ proptest! {
     }
 }
 
-/// Pulls that once flung the cloth with self-collision on: a corner folded
-/// gently over the sheet (2 N/m: the clamp's common motion then followed
-/// the pulled particle, and parting treated it as an immovable paddle),
-/// and stiff yanks of up to a metre and a half. Each ends less than half
-/// as far from its target as it started (the old code flung them metres off).
+/// With self-collision on, a corner folded gently over the sheet (2 N/m)
+/// and stiff yanks of up to a metre and a half: each particle ends less
+/// than half as far from its target as it started. (These flung the cloth
+/// metres off while the fallback clamp's common motion followed the pulled
+/// particle and parting treated it as an immovable paddle.)
 #[test]
-fn pulls_that_once_flung_the_cloth_draw_it_in() {
+fn pulls_across_the_sheet_with_self_collision_draw_the_particle_in() {
     let flat = flat(8);
     let rumpled = ClothSpec {
         imperfection: 0.01,
