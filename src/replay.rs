@@ -209,6 +209,11 @@ mod tests {
             ..read::Recording::default()
         };
         assert_eq!(old.solver_revision(), None);
+        let this = crate::solver::version();
+        assert_eq!(
+            crate::solver::revision_of(&this),
+            Some(crate::solver::REVISION)
+        );
 
         let now = crate::solver::REVISION;
         let replayed = |solver_revision, before_floating_origin| Replayed {

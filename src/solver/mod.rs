@@ -82,7 +82,18 @@ pub const REVISION: u32 = 1;
 /// This weft and its solver's results, `0.1.0 (solver revision 1)`:
 /// recordings, sweeps and fits are stamped with it.
 pub fn version() -> String {
-    format!("{} (solver revision {REVISION})", env!("CARGO_PKG_VERSION"))
+    format!("{} {SOLVER_REVISION}{REVISION})", env!("CARGO_PKG_VERSION"))
+}
+
+/// How [`version`] names the revision.
+const SOLVER_REVISION: &str = "(solver revision ";
+
+/// The solver revision a [`version`] names (within any text around it,
+/// `weft 0.1.0 (solver revision 1)`); `None` for one from before
+/// revisions were named.
+pub fn revision_of(version: &str) -> Option<u32> {
+    let (_, rest) = version.split_once(SOLVER_REVISION)?;
+    rest.strip_suffix(')')?.parse().ok()
 }
 
 use std::time::{Duration, Instant};
@@ -192,9 +203,6 @@ pub struct Solver {
     offsets: Offsets,
     /// Scratch: where the sweeps took the particles, while they are clamped.
     offset_target: Vec<Vec3>,
-    /// Scratch: which particles the clamp to the offsets may move (nonzero),
-    /// a pulled particle not ([`Solver::clamp_to_offsets`]).
-    offset_held: Vec<f32>,
     /// Substeps left that a jerk leaves unbounded ([`Solver::watch_for_jerks`]).
     unbounded: u32,
     rest_position: Vec<Vec3>,
@@ -244,7 +252,6 @@ impl Solver {
             self_contacts: SelfContacts::default(),
             offsets: Offsets::default(),
             offset_target: Vec::new(),
-            offset_held: Vec::new(),
             unbounded: 0,
             rest_position: (0..spec.warp)
                 .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))

@@ -102,9 +102,7 @@ impl Recording {
     /// The solver revision that made it ([`crate::solver::REVISION`]), if
     /// its weft named one.
     pub fn solver_revision(&self) -> Option<u32> {
-        let version = self.version.as_deref()?;
-        let (_, rest) = version.split_once("(solver revision ")?;
-        rest.strip_suffix(')')?.parse().ok()
+        crate::solver::revision_of(self.version.as_deref()?)
     }
 }
 

@@ -142,14 +142,7 @@ impl Solver {
         // A pulled particle is one of the cloth's, pushed and parted by
         // its mass like any other, but the clamp leaves it where its pull
         // took it: held back to its bound a grab would barely follow.
-        let held = match &self.pull {
-            Some(pull) => {
-                self.offset_held.clone_from(&self.inv_mass);
-                self.offset_held[pull.particle] = 0.0;
-                &self.offset_held
-            }
-            None => &self.inv_mass,
-        };
+        let pulled = self.pull.map(|p| p.particle);
         let (x, triangles) = (&mut self.state.position, &self.topology.triangles);
         if !self
             .offsets
@@ -165,7 +158,7 @@ impl Solver {
             for round in 1..=rounds {
                 let moved = self
                     .offsets
-                    .clamp(&mut self.state.position, &self.inv_mass, held);
+                    .clamp(&mut self.state.position, &self.inv_mass, pulled);
                 if moved == 0 || round == rounds {
                     break;
                 }

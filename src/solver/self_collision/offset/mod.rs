@@ -243,13 +243,18 @@ impl Offsets {
     /// Brings every free particle at `x` back within its bound of where
     /// the particles' mean displacement since the bounds were found
     /// carried it.
-    /// `inv_mass` is zero for the particles a body drives, `held` also for
-    /// a pulled one: a particle of no `held` mass beyond its bound is left
-    /// where its body (or its pull) took it, and the cloth is no longer
-    /// known to be free of crossings. Only the driven ones weigh more in
-    /// the mean: a pulled particle goes its own way, not the cloth's.
+    /// A particle a body drives (no `inv_mass`), or the `pulled` one,
+    /// beyond its bound is left where its body (or its pull) took it, and
+    /// the cloth is no longer known to be free of crossings. Only the
+    /// driven ones weigh more in the mean: a pulled particle goes its own
+    /// way, not the cloth's.
     /// Returns how many free particles it moved.
-    pub(crate) fn clamp(&mut self, x: &mut [Vec3], inv_mass: &[f32], held: &[f32]) -> usize {
+    pub(crate) fn clamp(
+        &mut self,
+        x: &mut [Vec3],
+        inv_mass: &[f32],
+        pulled: Option<usize>,
+    ) -> usize {
         let mut moved = 0;
         if self.start.len() != x.len() {
             return moved;
@@ -258,14 +263,15 @@ impl Offsets {
         if !t.is_finite() {
             return moved;
         }
-        for (((now, &then), &b), &w) in x.iter_mut().zip(&self.start).zip(&self.bound).zip(held) {
+        let moves = x.iter_mut().zip(&self.start).zip(&self.bound).zip(inv_mass);
+        for (i, (((now, &then), &b), &w)) in moves.enumerate() {
             if b == f32::INFINITY {
                 continue;
             }
             let rel = *now - then - t;
             let len2 = rel.length_squared();
             if len2 > b * b {
-                if w == 0.0 {
+                if w == 0.0 || pulled == Some(i) {
                     self.checked = false;
                     continue;
                 }
