@@ -863,7 +863,7 @@ fn a_recording_carries_its_layout() {
 /// `weft replay` can tell a recording made by another solver from a fault.
 #[test]
 fn the_solver_revision_names_its_results() {
-    let pinned = (1, "903b0e38c78fda68", "cf656ffc3c3d95ec");
+    let pinned = (2, "11f9c09d625edd9a", "4e75395cb6629b15");
     let preset = load::load("windy_flag", &[]).unwrap().preset;
     let mut scene = Scene::new(&preset).unwrap();
     for _ in 0..60 {

@@ -235,7 +235,8 @@ pub(crate) struct Contact {
     pub collider: usize,
 }
 
-/// Pushes every free particle out of every collider; records the deepest contact.
+/// Pushes every free particle out of every collider; records the deepest
+/// contact. Returns whether it moved a particle.
 pub(crate) fn project(
     x: &mut [Vec3],
     inv_mass: &[f32],
@@ -243,7 +244,8 @@ pub(crate) fn project(
     world_poses: &[Pose],
     margin: f32,
     contacts: &mut [Contact],
-) {
+) -> bool {
+    let mut moved = false;
     for (k, (c, pose)) in colliders.iter().zip(world_poses).enumerate() {
         for i in 0..x.len() {
             if inv_mass[i] == 0.0 {
@@ -257,6 +259,7 @@ pub(crate) fn project(
             if depth > 0.0 {
                 let n = pose.rotation * n_local;
                 x[i] += n * depth;
+                moved = true;
                 if depth > contacts[i].depth {
                     contacts[i] = Contact {
                         depth,
@@ -267,6 +270,7 @@ pub(crate) fn project(
             }
         }
     }
+    moved
 }
 
 /// Removes tangential motion relative to the collider at each contact.

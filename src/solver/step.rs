@@ -270,9 +270,7 @@ impl Solver {
         if bounded {
             self.keep_edges_apart();
             self.clamp_to_offsets(true);
-            // Parting the layers may have moved a particle into a collider:
-            // the colliders have the last word.
-            self.project_colliders(margin);
+            self.colliders_last(margin);
         }
         // Turns leave quaternions unit to rounding only; renormalise once.
         for q in &mut self.state.orientation {
@@ -292,13 +290,14 @@ impl Solver {
         }
     }
 
-    /// Pushes every free particle out of every collider (timed in diagnostics).
-    pub(in crate::solver) fn project_colliders(&mut self, margin: f32) {
+    /// Pushes every free particle out of every collider (timed in
+    /// diagnostics). Returns whether it moved a particle.
+    pub(in crate::solver) fn project_colliders(&mut self, margin: f32) -> bool {
         if self.colliders.is_empty() {
-            return;
+            return false;
         }
         let t = self.stopwatch();
-        collision::project(
+        let moved = collision::project(
             &mut self.state.position,
             &self.inv_mass,
             &self.colliders,
@@ -307,6 +306,7 @@ impl Solver {
             &mut self.contacts,
         );
         self.charge(t, |d| &mut d.timings.collisions);
+        moved
     }
 
     /// Before the first step: every free particle, and the reference motion

@@ -175,6 +175,38 @@ impl Solver {
         self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
     }
 
+    /// The colliders have the last word at a substep's end: parting the
+    /// layers may have moved a particle into one. A push out of a collider
+    /// is a move the path check has not seen, so the path is checked again
+    /// (`Offsets::path_clear`, parting what comes too near) and the
+    /// colliders push again, up to [`COLLIDER_ROUNDS`] times. A path still
+    /// not clear after them (a layer squeezed between a collider and
+    /// another layer) leaves the cloth no longer known to be free of
+    /// crossings: they are looked for at the next step's start.
+    pub(in crate::solver) fn colliders_last(&mut self, margin: f32) {
+        if !self.project_colliders(margin) {
+            return;
+        }
+        for _ in 0..COLLIDER_ROUNDS {
+            let t = self.stopwatch();
+            let clear = self.offsets.path_clear(
+                &mut self.state.position,
+                &self.inv_mass,
+                &self.topology.triangles,
+                &self.spec,
+                self.self_contacts.tangled(),
+            );
+            self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
+            if !self.project_colliders(margin) {
+                if clear {
+                    return;
+                }
+                break;
+            }
+        }
+        self.offsets.checked = false;
+    }
+
     /// Whether the self-collision family is on (its weight above 0).
     pub(in crate::solver) fn self_collision_on(&self) -> bool {
         self.params.weights[Family::SelfCollision] > 0.0
@@ -215,6 +247,10 @@ const JERK: f32 = 2.0;
 /// How many times a substep's end may be clamped to the offset bounds,
 /// finding them again in between ([`Solver::clamp_to_offsets`]).
 const OFFSET_ROUNDS: u32 = 6;
+
+/// How many times a substep's end checks the path again after the
+/// colliders pushed a particle ([`Solver::colliders_last`]).
+const COLLIDER_ROUNDS: u32 = 3;
 
 /// How many steps after a jerk self-collision leaves tangles alone.
 const JERK_WATCH: u32 = 60;

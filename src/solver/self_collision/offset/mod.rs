@@ -13,8 +13,9 @@
 //! at least `D⁰ − δ_A − δ_B` with `δ` each primitive's largest move beyond
 //! a common translation. [`Offsets::path_clear`] checks this for every pair
 //! of the near list (`pairs.rs`), exactly for the few the cheap test fails
-//! (the plane between their nearest points still parts them), and parts
-//! those that fail that along it, as an inelastic touch would.
+//! (the plane between their nearest points at the start or at the end
+//! parts them at both), and parts those that fail that along the start's,
+//! as an inelastic touch would.
 //!
 //! **The bounds, the fallback.** Where the path still is not clear, every
 //! particle `i` gets a bound `b_i = γ d_i` (`γ < ½`, `d_i` its distance to

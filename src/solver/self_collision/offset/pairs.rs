@@ -20,8 +20,9 @@
 //! - a listed pair's lower bound `D − Δ_A − Δ_B` at a substep's start,
 //!   against how far its corners moved in the substep, clears the path for
 //!   most pairs without a distance ([`NearPairs::passes`]); the rest are
-//!   checked along the normal between their nearest points, and parted
-//!   along it where they approach too fast ([`NearPairs::part_failing`]);
+//!   checked along the normal between their nearest points at the start,
+//!   or at the end, and parted along the start's where neither parts them
+//!   ([`NearPairs::part_failing`]);
 //! - for the bounds, a listed pair whose lower bound is at least `r` is
 //!   farther than `r` and not measured ([`NearPairs::nearest`]).
 //!
@@ -50,8 +51,10 @@ use crate::solver::team;
 /// The list's reach, in rest spacings: it holds every pair nearer than
 /// that at the search (and a particle's allowance farther). The particles
 /// may drift beyond their mean motion by 0.45 of it, less the bounds'
-/// radius for the bounds, before a search is made again.
-const REACH: f32 = 1.0;
+/// radius for the bounds, before a search is made again. Below the 0.7 of
+/// a spacing a flat grid keeps a corner from the diagonal across its cell,
+/// so the list leaves those neighbours out (docs/method.md §11b).
+const REACH: f32 = 0.6;
 
 /// How many substeps' moves a search allows each particle to drift
 /// ([`NearPairs::search_ahead`]), and at most how many reaches.
@@ -130,6 +133,43 @@ impl Corners {
             ids: [e[0], e[1], f[0], f[1]],
             split: 2,
         }
+    }
+
+    /// The unit direction from the other primitive's nearest point to the
+    /// first's at `x`, and their distance; `None` for a degenerate triangle
+    /// or primitives that touch.
+    fn nearest(&self, x: &[Vec3]) -> Option<(Vec3, f32)> {
+        let [a, b, c, d] = self.ids.map(|k| x[k as usize]);
+        let (on_one, on_other) = if self.split == 1 {
+            (a, closest_on_triangle(a, [b, c, d])?)
+        } else {
+            let (_, s, t) = closest_on_segments(a, b, c, d);
+            (a + (b - a) * s, c + (d - c) * t)
+        };
+        let distance = on_one.distance(on_other);
+        let normal = (on_one - on_other) / distance;
+        normal.is_finite().then_some((normal, distance))
+    }
+
+    /// Whether the pair may meet on the straight path from `from` to `x`:
+    /// `None` if a plane parts its corners by `1 − PATH_SHARE` of their
+    /// distance at `from` at both ends, so all along the path (the gap
+    /// along a fixed normal between two convex hulls is concave in the
+    /// path's parameter), for the plane between the nearest points at
+    /// `from` or the one between them at `x`. A degenerate triangle at
+    /// `from` is left to its edges.
+    fn path_failing(self, from: &[Vec3], x: &[Vec3]) -> Option<Failing> {
+        let (normal, distance) = self.nearest(from)?;
+        let wanted = (1.0 - PATH_SHARE) * distance;
+        let parted = |n: Vec3| self.gap(from, n).ge(&wanted) && self.gap(x, n).ge(&wanted);
+        if parted(normal) || self.nearest(x).is_some_and(|(n, _)| parted(n)) {
+            return None;
+        }
+        Some(Failing {
+            corners: self,
+            normal,
+            distance,
+        })
     }
 
     /// How far apart along `normal` the first primitive's corners are from
@@ -313,7 +353,8 @@ impl NearPairs {
     /// [`PATH_SHARE`] of its distance at `from`: its primitives' largest
     /// moves in the substep beyond the mean add up to less than that share
     /// of a lower bound on it, or else the plane between its nearest points
-    /// at `from` still parts its corners by the rest. Pairs and drifts of
+    /// at `from`, or the one between them at `x`, parts its corners by the
+    /// rest at both ends. Pairs and drifts of
     /// `exempt` particles are not held to it. The pairs that fail are kept
     /// for [`NearPairs::part_failing`].
     pub(super) fn passes(
@@ -367,39 +408,13 @@ impl NearPairs {
                 self.near_edges.push((i, j));
             }
         }
-        // Since the substep's start: the plane between the pair's nearest
-        // points there still parts them (a degenerate triangle is left to
-        // its edges).
         let failing = &mut self.failing;
-        let mut check = |corners: Corners, nearest: Option<(Vec3, Vec3)>| {
-            let Some((on_one, on_other)) = nearest else {
-                return;
-            };
-            let distance = on_one.distance(on_other);
-            let normal = (on_one - on_other) / distance;
-            let wanted = (1.0 - PATH_SHARE) * distance;
-            if !normal.is_finite() || !corners.gap(x, normal).ge(&wanted) {
-                failing.push(Failing {
-                    corners,
-                    normal,
-                    distance,
-                });
-            }
-        };
         for &(p, t) in &self.near_faces {
-            let tri = triangles[t as usize].map(|k| from[k as usize]);
-            let q = closest_on_triangle(from[p as usize], tri);
-            let corners = Corners::face(p, triangles[t as usize]);
-            check(corners, q.map(|q| (from[p as usize], q)));
+            failing.extend(Corners::face(p, triangles[t as usize]).path_failing(from, x));
         }
         for &(i, j) in &self.near_edges {
-            let (e, f) = (segments[i as usize], segments[j as usize]);
-            let [u, v, a, b] = [e[0], e[1], f[0], f[1]].map(|k| from[k as usize]);
-            let (_, s, t) = closest_on_segments(u, v, a, b);
-            check(
-                Corners::edges(e, f),
-                Some((u + (v - u) * s, a + (b - a) * t)),
-            );
+            let corners = Corners::edges(segments[i as usize], segments[j as usize]);
+            failing.extend(corners.path_failing(from, x));
         }
         self.failing.is_empty()
     }
@@ -661,5 +676,54 @@ fn for_each_face_distance(
         for (&(p, t), &d) in eight.iter().zip(&d) {
             f(p, t, d);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Edge `e` (particles 0, 1) beside the end of edge `f` (2, 3) at the
+    /// start, slid along `f` to stand over its middle at the end.
+    fn sliding_over_an_end(lift: f32) -> ([Vec3; 4], [Vec3; 4]) {
+        let f = [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0)];
+        let from = [
+            Vec3::new(1.2, 0.0, 0.1),
+            Vec3::new(1.2, 0.0, 1.1),
+            f[0],
+            f[1],
+        ];
+        let x = [
+            Vec3::new(0.0, 0.0, lift),
+            Vec3::new(0.0, 0.0, lift + 1.0),
+            f[0],
+            f[1],
+        ];
+        (from, x)
+    }
+
+    #[test]
+    fn an_edge_that_slides_over_another_passes_by_the_plane_at_the_end() {
+        let pair = Corners::edges([0, 1], [2, 3]);
+        let (from, x) = sliding_over_an_end(0.1);
+        // The start's plane, from `f`'s end to `e`'s, is crossed by `f`
+        // itself at the end: alone, it would part a pair that never came
+        // nearer than 0.1.
+        let (normal, _) = pair.nearest(&from).unwrap();
+        assert!(pair.gap(&x, normal) < 0.0);
+        assert!(pair.path_failing(&from, &x).is_none());
+    }
+
+    #[test]
+    fn an_edge_that_comes_down_onto_another_fails() {
+        let pair = Corners::edges([0, 1], [2, 3]);
+        // At the end `e` is 0.01 above `f`: it closed 0.21 of 0.22.
+        let (from, x) = sliding_over_an_end(0.01);
+        let failing = pair.path_failing(&from, &x).expect("it approached");
+        assert!(
+            (failing.distance - 0.2236).abs() < 1e-3,
+            "{}",
+            failing.distance
+        );
     }
 }
