@@ -184,27 +184,38 @@ impl Solver {
     /// another layer) leaves the cloth no longer known to be free of
     /// crossings: they are looked for at the next step's start.
     pub(in crate::solver) fn colliders_last(&mut self, margin: f32) {
-        if !self.project_colliders(margin) {
-            return;
+        // The state the path was cleared to, in the clamp's scratch.
+        let mut cleared = std::mem::take(&mut self.offset_target);
+        cleared.clone_from(&self.state.position);
+        if self.project_colliders(margin) && !self.check_colliders_push(&cleared, margin) {
+            self.offsets.checked = false;
         }
+        self.offset_target = cleared;
+    }
+
+    /// [`Solver::colliders_last`]'s rounds after the colliders pushed a
+    /// particle away from `cleared`: whether the path ends clear.
+    fn check_colliders_push(&mut self, cleared: &[Vec3], margin: f32) -> bool {
         for _ in 0..COLLIDER_ROUNDS {
             let t = self.stopwatch();
-            let clear = self.offsets.path_clear(
+            let clear = self.offsets.path_clear_after(
                 &mut self.state.position,
+                cleared,
                 &self.inv_mass,
                 &self.topology.triangles,
                 &self.spec,
                 self.self_contacts.tangled(),
             );
             self.charge(t, |d| &mut d.families[Family::SelfCollision].time);
+            // Nothing parted: the colliders' push is where it was left.
+            if clear && !self.offsets.parted {
+                return true;
+            }
             if !self.project_colliders(margin) {
-                if clear {
-                    return;
-                }
-                break;
+                return clear;
             }
         }
-        self.offsets.checked = false;
+        false
     }
 
     /// Whether the self-collision family is on (its weight above 0).

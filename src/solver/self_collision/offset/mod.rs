@@ -88,6 +88,8 @@ pub(crate) struct Offsets {
     /// free of them: false once a driven particle, which is not clamped,
     /// went beyond its bound.
     pub checked: bool,
+    /// Whether the last [`Offsets::path_clear`] parted a pair.
+    pub parted: bool,
 }
 
 impl Offsets {
@@ -152,6 +154,7 @@ impl Offsets {
         spec: &ClothSpec,
         exempt: Option<&[bool]>,
     ) -> bool {
+        self.parted = false;
         if self.from.len() != x.len() || self.near.passes(x, &self.from, triangles, exempt) {
             return true;
         }
@@ -175,12 +178,32 @@ impl Offsets {
             }
         }
         for _ in 0..PART_ROUNDS {
+            self.parted = true;
             self.near.part_failing(x, inv_mass);
             if self.near.passes(x, &self.from, triangles, exempt) {
                 return true;
             }
         }
         false
+    }
+
+    /// [`Offsets::path_clear`] for `x`, moved from `before`, to which the
+    /// path from the substep's start was cleared (by the check or by the
+    /// bounds): only the pairs with a particle that moved since are checked
+    /// again, the others' corners being where they were.
+    pub(crate) fn path_clear_after(
+        &mut self,
+        x: &mut [Vec3],
+        before: &[Vec3],
+        inv_mass: &[f32],
+        triangles: &[[u32; 3]],
+        spec: &ClothSpec,
+        exempt: Option<&[bool]>,
+    ) -> bool {
+        self.near.check_only_moved(x, before);
+        let clear = self.path_clear(x, inv_mass, triangles, spec, exempt);
+        self.near.check_all();
+        clear
     }
 
     /// Finds every particle's bound at the substep's start.

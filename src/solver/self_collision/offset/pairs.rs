@@ -236,6 +236,9 @@ pub(super) struct NearPairs {
     near_edges: Vec<(u32, u32)>,
     /// The pairs the last [`NearPairs::passes`] failed.
     failing: Vec<Failing>,
+    /// The particles whose pairs alone are checked; every pair if empty
+    /// ([`NearPairs::check_only_moved`]).
+    only: Vec<bool>,
 }
 
 /// What [`NearPairs::nearest`] finds.
@@ -383,12 +386,17 @@ impl NearPairs {
         self.step.primitives(triangles, &self.segments);
         let segments = &self.segments;
         let free = |ids: &[u32]| exempt.is_none_or(|e| ids.iter().all(|&k| !e[k as usize]));
+        let only = &self.only;
+        let checked = |ids: &[u32]| only.is_empty() || ids.iter().any(|&k| only[k as usize]);
         // A pair at least `d − start` apart at the substep's start whose
         // corners have moved apart by at most `step` since is clear.
         let (start, step) = (&self.drift_from, &self.step);
         self.near_faces.clear();
         for &(p, t, d) in &self.faces {
             let (p_, t_) = (p as usize, t as usize);
+            if !checked(&[p]) && !checked(&triangles[t_]) {
+                continue;
+            }
             let (moved, gap) = (
                 step.particle[p_] + step.triangle[t_],
                 d - start.particle[p_] - start.triangle[t_],
@@ -400,6 +408,9 @@ impl NearPairs {
         self.near_edges.clear();
         for &(i, j, d) in &self.edges {
             let (i_, j_) = (i as usize, j as usize);
+            if !checked(&segments[i_]) && !checked(&segments[j_]) {
+                continue;
+            }
             let (moved, gap) = (
                 step.segment[i_] + step.segment[j_],
                 d - start.segment[i_] - start.segment[j_],
@@ -425,7 +436,9 @@ impl NearPairs {
     /// mass (a primitive with a driven corner stays), until the gap is
     /// `1 − PART_SHARE` of the pair's distance there. Momentum is kept.
     /// A pair with driven corners on both sides is left as it is.
-    pub(super) fn part_failing(&self, x: &mut [Vec3], inv_mass: &[f32]) {
+    /// Where only some particles' pairs are checked, the parted pairs'
+    /// corners are checked from then on too.
+    pub(super) fn part_failing(&mut self, x: &mut [Vec3], inv_mass: &[f32]) {
         for f in &self.failing {
             let gap = f.corners.gap(x, f.normal);
             let wanted = (1.0 - PART_SHARE) * f.distance;
@@ -454,7 +467,27 @@ impl NearPairs {
             for &k in other {
                 x[k as usize] -= push * (1.0 - share);
             }
+            if !self.only.is_empty() {
+                for &k in &f.corners.ids {
+                    self.only[k as usize] = true;
+                }
+            }
         }
+    }
+
+    /// From now on only the pairs with a corner that has moved from
+    /// `before` to `x` are checked by [`NearPairs::passes`]: the path from
+    /// the substep's start to `before` was cleared, and the other pairs'
+    /// corners are where they were (their bounds hold for any common
+    /// translation).
+    pub(super) fn check_only_moved(&mut self, x: &[Vec3], before: &[Vec3]) {
+        self.only.clear();
+        self.only.extend(x.iter().zip(before).map(|(a, b)| a != b));
+    }
+
+    /// From now on every pair is checked again.
+    pub(super) fn check_all(&mut self) {
+        self.only.clear();
     }
 
     /// Whether the last [`NearPairs::passes`] failed on pairs (else on a
