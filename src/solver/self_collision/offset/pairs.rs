@@ -644,14 +644,20 @@ impl NearPairs {
         );
         let (boxes, segments) = (&self.boxes, &self.segments);
         let blocks = team::run_blocks(threads, boxes.len(), BLOCK, |range| {
+            // Edges that share a particle are no pair (most of the boxes
+            // that overlap): left out before their distances, which are
+            // measured eight at a time.
             let mut near = Vec::new();
-            boxes.overlapping(range, |i, j| near.push((i.min(j), i.max(j))));
-            // Their distances eight at a time; edges that share a particle
-            // are dropped after.
+            boxes.overlapping(range, |i, j| {
+                let (e, f) = (segments[i as usize], segments[j as usize]);
+                if !f.contains(&e[0]) && !f.contains(&e[1]) {
+                    near.push((i.min(j), i.max(j)));
+                }
+            });
             let mut found = Vec::new();
             for_each_edge_distance(x, segments, &near, |i, j, d| {
                 let (e, f) = (segments[i as usize], segments[j as usize]);
-                if d < reach + most(&e) + most(&f) && !f.contains(&e[0]) && !f.contains(&e[1]) {
+                if d < reach + most(&e) + most(&f) {
                     found.push((i, j, d));
                 }
             });
