@@ -178,7 +178,8 @@ impl Solver {
     /// The colliders have the last word at a substep's end: parting the
     /// layers may have moved a particle into one. A push out of a collider
     /// is a move the path check has not seen, so the path is checked again
-    /// (`Offsets::path_clear`, parting what comes too near) and the
+    /// for the pairs of the particles it moved (`Offsets::path_clear_after`,
+    /// parting what comes too near), and while parting moves particles the
     /// colliders push again, up to [`COLLIDER_ROUNDS`] times. A path still
     /// not clear after them (a layer squeezed between a collider and
     /// another layer) leaves the cloth no longer known to be free of
