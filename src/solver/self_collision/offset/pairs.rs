@@ -229,6 +229,10 @@ pub(super) struct NearPairs {
     step: Drift,
     /// Whether `drift_from` is the substep's start's.
     start_known: bool,
+    /// Per listed pair (faces, then edges), how far its corners may move
+    /// apart in the substep for its path to be clear without a test:
+    /// [`PATH_SHARE`] of its lower bound at the substep's start.
+    may_close: Vec<f32>,
     /// The mesh's edges, in the order the list refers to them by.
     segments: Vec<[u32; 2]>,
     /// Scratch: the pairs to measure.
@@ -380,6 +384,14 @@ impl NearPairs {
                 self.drift_from.particles(from, &self.at);
             }
             self.drift_from.primitives(triangles, &self.segments);
+            let start = &self.drift_from;
+            self.may_close.clear();
+            self.may_close.extend(self.faces.iter().map(|&(p, t, d)| {
+                PATH_SHARE * (d - start.particle[p as usize] - start.triangle[t as usize])
+            }));
+            self.may_close.extend(self.edges.iter().map(|&(i, j, d)| {
+                PATH_SHARE * (d - start.segment[i as usize] - start.segment[j as usize])
+            }));
             self.start_known = true;
         }
         self.step.particles(x, from);
@@ -390,32 +402,27 @@ impl NearPairs {
         let checked = |ids: &[u32]| only.is_empty() || ids.iter().any(|&k| only[k as usize]);
         // A pair at least `d − start` apart at the substep's start whose
         // corners have moved apart by at most `step` since is clear.
-        let (start, step) = (&self.drift_from, &self.step);
+        let step = &self.step;
+        let (faces_close, edges_close) = self.may_close.split_at(self.faces.len());
         self.near_faces.clear();
-        for &(p, t, d) in &self.faces {
+        for (&(p, t, _), close) in self.faces.iter().zip(faces_close) {
             let (p_, t_) = (p as usize, t as usize);
             if !checked(&[p]) && !checked(&triangles[t_]) {
                 continue;
             }
-            let (moved, gap) = (
-                step.particle[p_] + step.triangle[t_],
-                d - start.particle[p_] - start.triangle[t_],
-            );
-            if !moved.lt(&(PATH_SHARE * gap)) && free(&[p]) && free(&triangles[t_]) {
+            let moved = step.particle[p_] + step.triangle[t_];
+            if !moved.lt(close) && free(&[p]) && free(&triangles[t_]) {
                 self.near_faces.push((p, t));
             }
         }
         self.near_edges.clear();
-        for &(i, j, d) in &self.edges {
+        for (&(i, j, _), close) in self.edges.iter().zip(edges_close) {
             let (i_, j_) = (i as usize, j as usize);
             if !checked(&segments[i_]) && !checked(&segments[j_]) {
                 continue;
             }
-            let (moved, gap) = (
-                step.segment[i_] + step.segment[j_],
-                d - start.segment[i_] - start.segment[j_],
-            );
-            if !moved.lt(&(PATH_SHARE * gap)) && free(&segments[i_]) && free(&segments[j_]) {
+            let moved = step.segment[i_] + step.segment[j_];
+            if !moved.lt(close) && free(&segments[i_]) && free(&segments[j_]) {
                 self.near_edges.push((i, j));
             }
         }
