@@ -9,7 +9,9 @@
 //! - [`preset_diff`]: what a tuning changed against its preset (run names,
 //!   saving as `extend` plus changed keys);
 //! - [`ruler`]: a drag on the viewer's time ruler scrubs instead of making
-//!   a loop selection.
+//!   a loop selection;
+//! - `driver`: a warning at start for a graphics driver known to leak
+//!   memory while the window plays.
 //!
 //! The viewer is fed in-process: every message of the session's recording
 //! streams goes into a `re_log_channel` that the embedded viewer reads, so
@@ -17,6 +19,7 @@
 //! event callback (time cursor, selection), which the panel reads from a
 //! [`panel::ViewerLink`].
 
+mod driver;
 pub mod history;
 pub mod panel;
 pub mod preset_diff;
@@ -301,6 +304,10 @@ pub fn run(
         options,
         Box::new(move |cc| {
             re_viewer::customize_eframe_and_setup_renderer(cc)?;
+            let adapter = cc.wgpu_render_state.as_ref().map(|r| r.adapter.get_info());
+            if let Some(w) = adapter.as_ref().and_then(driver::warning) {
+                eprintln!("warning: {w}");
+            }
             let mut viewer = re_viewer::App::new(
                 main_thread_token,
                 re_viewer::build_info(),
