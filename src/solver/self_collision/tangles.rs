@@ -267,14 +267,12 @@ pub(super) fn scan_crossings(
             continue;
         };
         let mut visit = |p: u32| {
-            if half[p as usize] > grow {
+            let reach = half[p as usize];
+            if reach > grow {
                 return; // in the pass below
             }
-            let xp = x[p as usize];
             for t in ts.iter_mut().flatten() {
-                if xp.cmpge(t.lo - pad).all() && xp.cmple(t.hi + pad).all() {
-                    t.edges_from(p, x, spec, &mut crossing);
-                }
+                t.edges_from(p, reach, x, spec, &mut crossing);
             }
         };
         match near {
@@ -293,10 +291,16 @@ pub(super) fn scan_crossings(
             continue;
         };
         for &p in &far {
-            t.edges_from(p, x, spec, &mut crossing);
+            t.edges_from(p, half[p as usize], x, spec, &mut crossing);
         }
     }
 }
+
+/// How much farther than half its edge, relatively, the nearer end of an
+/// edge that crosses a triangle's plane may seem to be from that plane:
+/// room for rounding (the ends' distances from the plane add up to at
+/// most the edge's length).
+const PLANE_SLACK: f32 = 1.001;
 
 /// A triangle, with what counting the edges that cross it needs.
 struct TriangleCrossing {
@@ -325,22 +329,28 @@ impl TriangleCrossing {
 
     /// Calls `crossing` for every edge of particle `p` that crosses the
     /// triangle, `p` being its nearer end (or as near, and the lower index),
-    /// so that each crossing is counted once.
+    /// so that each crossing is counted once. `reach` is half the longest
+    /// edge at `p`: the nearer end of an edge that crosses lies within half
+    /// the edge of the triangle's box and of its plane, so a particle
+    /// farther from either is passed over before its edges are measured.
     #[inline]
     fn edges_from(
         &mut self,
         p: u32,
+        reach: f32,
         x: &[Vec3],
         spec: &ClothSpec,
         crossing: &mut impl FnMut([u32; 2], [u32; 3], Vec3),
     ) {
         let tri = self.corners;
-        if tri.contains(&p) {
+        let xp = x[p as usize];
+        let grown = Vec3::splat(reach);
+        if tri.contains(&p) || !(xp.cmpge(self.lo - grown).all() && xp.cmple(self.hi + grown).all())
+        {
             return;
         }
-        let xp = x[p as usize];
         let dp = self.t.distance(xp);
-        if dp.abs() <= ON_PLANE {
+        if dp.abs() <= ON_PLANE || dp.abs() > reach * PLANE_SLACK + ON_PLANE {
             return;
         }
         for o in edges_at(p, spec) {
