@@ -304,8 +304,8 @@ pub fn run(
         options,
         Box::new(move |cc| {
             re_viewer::customize_eframe_and_setup_renderer(cc)?;
-            let adapter = cc.wgpu_render_state.as_ref().map(|r| r.adapter.get_info());
-            if let Some(w) = adapter.as_ref().and_then(driver::warning) {
+            let render = cc.wgpu_render_state.as_ref();
+            if let Some(w) = render.and_then(|r| driver::warning(&r.adapter.get_info())) {
                 eprintln!("warning: {w}");
             }
             let mut viewer = re_viewer::App::new(

@@ -327,6 +327,13 @@ impl TriangleCrossing {
         })
     }
 
+    /// Whether `x` lies in the triangle's box grown by `grow`.
+    #[inline(always)]
+    fn near_box(&self, x: Vec3, grow: f32) -> bool {
+        let grow = Vec3::splat(grow);
+        x.cmpge(self.lo - grow).all() && x.cmple(self.hi + grow).all()
+    }
+
     /// Calls `crossing` for every edge of particle `p` that crosses the
     /// triangle, `p` being its nearer end (or as near, and the lower index),
     /// so that each crossing is counted once. `reach` is half the longest
@@ -344,9 +351,7 @@ impl TriangleCrossing {
     ) {
         let tri = self.corners;
         let xp = x[p as usize];
-        let grown = Vec3::splat(reach);
-        if tri.contains(&p) || !(xp.cmpge(self.lo - grown).all() && xp.cmple(self.hi + grown).all())
-        {
+        if tri.contains(&p) || !self.near_box(xp, reach) {
             return;
         }
         let dp = self.t.distance(xp);
@@ -363,8 +368,7 @@ impl TriangleCrossing {
             {
                 continue;
             }
-            let half = Vec3::splat(0.5 * xp.distance(xo));
-            if !(xp.cmpge(self.lo - half).all() && xp.cmple(self.hi + half).all()) {
+            if !self.near_box(xp, 0.5 * xp.distance(xo)) {
                 continue;
             }
             let t = &self.t;
