@@ -21,7 +21,7 @@
 
 use super::prune::{SortedBoxes, widest_axis};
 use crate::solver::team;
-use glam::{IVec3, Vec3};
+use glam::{I64Vec3, IVec3, Vec3};
 
 /// Which particles lie near each triangle of a mesh: every particle inside
 /// the triangle's bounding box grown by `reach + skin`, found among the
@@ -250,11 +250,12 @@ impl SpatialHash {
 
     /// Calls `f` with every particle whose cell overlaps the box `[lo, hi]`,
     /// each once. A box over more cells than there are particles (a cloth
-    /// blown apart) visits every particle instead.
+    /// blown apart, a box reaching infinity) visits every particle instead.
     pub(crate) fn query(&self, lo: Vec3, hi: Vec3, mut f: impl FnMut(u32)) {
         let (a, b) = (cell_of(lo, self.inv_cell), cell_of(hi, self.inv_cell));
-        let span = (b - a + IVec3::ONE).max(IVec3::ZERO).as_i64vec3();
-        if span.x * span.y * span.z > self.cells.len() as i64 {
+        // In 64 bits: from the lowest cell to the highest, 32 would wrap.
+        let span = (b.as_i64vec3() - a.as_i64vec3() + I64Vec3::ONE).max(I64Vec3::ZERO);
+        if span.x.saturating_mul(span.y).saturating_mul(span.z) > self.cells.len() as i64 {
             (0..self.cells.len() as u32).for_each(f);
             return;
         }
@@ -285,11 +286,11 @@ fn cell_of(p: Vec3, inv_cell: f32) -> IVec3 {
 }
 
 /// `⌊v⌋` as an integer, inline (without SSE4.1, `f32::floor` is a library
-/// call). `as` saturates, so a far particle lands in an edge cell.
+/// call). Saturating, so a far particle lands in an edge cell.
 #[inline(always)]
 fn floor(v: f32) -> i32 {
     let t = v as i32;
-    t - i32::from(v < t as f32)
+    t.saturating_sub(i32::from(v < t as f32))
 }
 
 /// The bucket of a cell, among `mask + 1`.
@@ -408,5 +409,15 @@ mod tests {
             })
             .collect();
         assert_eq!(sorted, expected);
+    }
+
+    #[test]
+    fn a_query_reaching_infinity_visits_every_particle_once() {
+        let x: Vec<Vec3> = (0..50).map(|k| Vec3::splat(k as f32 * 0.1)).collect();
+        let mut hash = SpatialHash::default();
+        hash.build(&x, 0.3);
+        let mut found = Vec::new();
+        hash.query(Vec3::NEG_INFINITY, Vec3::INFINITY, |p| found.push(p));
+        assert_eq!(found, (0..50).collect::<Vec<u32>>());
     }
 }
