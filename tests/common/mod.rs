@@ -3,6 +3,7 @@
 // Each test file uses the helpers it needs.
 #![allow(dead_code)]
 
+pub mod crossings;
 #[cfg(feature = "viewer")]
 pub mod panel;
 
