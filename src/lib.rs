@@ -10,6 +10,8 @@
 //!   (also sharded over a batch engine's array jobs).
 //! - [`fit`]: the values of live keys that bring a preset closest to a
 //!   reference run or to target figures, searched on sweeps.
+//! - [`report`]: a sweep's, a fit's or a comparison's results as one HTML
+//!   page with plots.
 //! - [`interrupt`]: Ctrl-C for long headless jobs (a clean stop, then a quit).
 //! - [`cli`]: the `weft` command line.
 //! - `app` (feature `viewer`, on by default): the desktop debugger, the Rerun
@@ -30,6 +32,7 @@ pub mod fit;
 pub mod interrupt;
 pub mod record;
 pub mod replay;
+pub mod report;
 pub mod scene;
 pub mod solver;
 pub mod sweep;

@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 
 /// Each module of the crate and the modules it may use.
-const ALLOWED: [(&str, &[&str]); 11] = [
+const ALLOWED: [(&str, &[&str]); 12] = [
     ("solver", &[]),
     ("scene", &["solver"]),
     ("telemetry", &["scene", "solver"]),
@@ -48,11 +48,26 @@ const ALLOWED: [(&str, &[&str]); 11] = [
             "interrupt",
         ],
     ),
+    (
+        "report",
+        &[
+            "fit",
+            "sweep",
+            "compare",
+            "record",
+            "replay",
+            "telemetry",
+            "scene",
+            "solver",
+            "interrupt",
+        ],
+    ),
     ("app", &["record", "replay", "telemetry", "scene", "solver"]),
     (
         "cli",
         &[
             "app",
+            "report",
             "compare",
             "fit",
             "sweep",

@@ -248,7 +248,7 @@ fn a_sweep_writes_every_point_and_resumes_after_an_interruption() {
         .iter()
         .flat_map(|n| [format!("{n}.json"), format!("{n}.rrd")])
         .collect();
-    expected.push("sweep.json".into());
+    expected.extend(["sweep.json".into(), "report.html".into()]);
     expected.sort();
     assert_eq!(files(&out), expected);
     let before = results(&out);
@@ -327,7 +327,11 @@ fn parallel_and_sharded_sweeps_equal_the_serial_one() {
     assert_eq!(reference.len(), 4);
     assert_eq!(results(&parallel), reference, "--jobs 2");
     assert_eq!(results(&sharded), reference, "the union of 3 shards");
-    assert_eq!(files(&sharded), files(&serial));
+    // The same files; a shard leaves the page to `--collect`.
+    let mut whole = files(&sharded);
+    whole.push("report.html".into());
+    whole.sort();
+    assert_eq!(whole, files(&serial));
 
     // A Slurm array task takes its shard from the environment.
     let slurm = dir.path().join("slurm");

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use anyhow::Context;
 use clap::Args;
 use glam::Vec3;
 
@@ -10,6 +11,8 @@ use super::output::{out, outln};
 use crate::compare::gate::{self, Bound};
 use crate::compare::recording::{self, Placement};
 use crate::compare::{RunData, incomparable, read_all, report};
+use crate::report::compare::Manifest;
+use crate::report::sweep::shell;
 
 /// Options of `weft compare`.
 #[derive(Debug, Args)]
@@ -34,6 +37,11 @@ pub struct CompareArgs {
     /// Write the comparison recording to this `.rrd` file.
     #[arg(long, value_name = "FILE.rrd", group = "sink")]
     pub save: Option<PathBuf>,
+    /// Write the comparison into this directory: the comparison recording
+    /// (comparison.rrd), a page with plots (report.html) and which files were
+    /// compared (compare.json, for `weft report DIR`).
+    #[arg(long, value_name = "DIR", group = "sink")]
+    pub out: Option<PathBuf>,
     /// Stream the comparison to a running Rerun viewer.
     #[arg(long, value_name = "URL", num_args = 0..=1, default_missing_value = crate::telemetry::DEFAULT_VIEWER, group = "sink")]
     pub connect: Option<String>,
@@ -55,8 +63,15 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     let text = report::report(&runs);
     out!("{text}");
 
-    if args.save.is_some() || args.connect.is_some() {
-        let rec = recording::open(&runs, args.save.as_deref(), args.connect.as_deref())?;
+    let save = match &args.out {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+            Some(dir.join(crate::fit::report::COMPARISON))
+        }
+        None => args.save.clone(),
+    };
+    if save.is_some() || args.connect.is_some() {
+        let rec = recording::open(&runs, save.as_deref(), args.connect.as_deref())?;
         let placement = if args.overlay {
             Placement::Overlay
         } else {
@@ -69,13 +84,24 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         };
         recording::write(&rec, &runs, placement, &text)?;
         drop(rec);
-        if let Some(path) = &args.save {
+        if let Some(path) = &save {
             outln!(
                 "\ncomparison written to {} (open it with `rerun {}`)",
                 path.display(),
                 path.display()
             );
         }
+    }
+
+    if let Some(dir) = &args.out {
+        let manifest = Manifest::new(command(&args), &args.files);
+        manifest.write(dir)?;
+        let page =
+            crate::report::write(dir, &crate::report::compare::page(&runs, &manifest, dir)?)?;
+        outln!(
+            "the comparison's page: {} (open it in a browser)",
+            page.display()
+        );
     }
 
     let regressions = gate::check(&args.fail_if, &runs);
@@ -123,4 +149,25 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// The command line that made this comparison, as a person would type it.
+fn command(args: &CompareArgs) -> String {
+    let mut s = "weft compare".to_string();
+    for f in &args.files {
+        s += &format!(" {}", shell(&f.display().to_string()));
+    }
+    if args.overlay {
+        s += " --overlay";
+    }
+    if args.axis != "auto" {
+        s += &format!(" --axis {}", args.axis);
+    }
+    for b in &args.fail_if {
+        s += &format!(" --fail-if {}", shell(&b.to_string()));
+    }
+    if let Some(dir) = &args.out {
+        s += &format!(" --out {}", shell(&dir.display().to_string()));
+    }
+    s
 }

@@ -167,6 +167,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     bar.finish_and_clear();
     match &outcome.halt {
         Halt::Interrupted => {
+            write_page(&fit, &outcome, out_dir)?;
             eprintln!(
                 "interrupted: {} run(s) kept in {}; run the same command again to resume",
                 outcome.points.len(),
@@ -212,6 +213,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     let best = outcome.best().expect("a complete fit has its start");
     let fitted = report::write_fitted(&fit, best, out_dir)?;
     let comparison = report::write_comparison(&fit, &outcome, out_dir, &table)?;
+    write_page(&fit, &outcome, out_dir)?;
     eprintln!(
         "fitted preset: {} (weft show {0}; weft gui {0})\ncomparison of {}: {} (rerun {2})",
         fitted.display(),
@@ -223,4 +225,15 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
         comparison.display()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Writes the fit's page (`DIR/report.html`) and says where.
+fn write_page(
+    fit: &Fit,
+    outcome: &crate::fit::Outcome,
+    dir: &std::path::Path,
+) -> anyhow::Result<()> {
+    let page = crate::report::write(dir, &crate::report::fit::page(fit, outcome, dir)?)?;
+    eprintln!("the fit's page: {} (open it in a browser)", page.display());
+    Ok(())
 }

@@ -67,6 +67,15 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
     /// Search live keys for the values that bring a preset closest to a reference run or target figures.
     Fit(fit::FitArgs),
+    /// Make the page of a sweep's, a fit's or a comparison's results (DIR/report.html, with plots).
+    #[command(after_help = "\
+The commands write this page themselves as they finish (weft sweep, weft sweep --collect,
+weft fit, weft compare --out); this makes it again, e.g. of a sweep run in shards.
+Nothing is run: a sweep or fit not finished gives a page of what is done, labelled partial.")]
+    Report {
+        /// A directory written by `weft sweep`, `weft fit` or `weft compare --out`.
+        dir: PathBuf,
+    },
 }
 
 /// Options of `weft gui`.
@@ -207,6 +216,14 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
         Command::Fit(args) => fit::fit(args),
+        Command::Report { dir } => {
+            let (kind, path) = crate::report::from_dir(&dir)?;
+            eprintln!(
+                "the {kind}'s page: {} (open it in a browser)",
+                path.display()
+            );
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Replay { file } => {
             let r = crate::replay::replay(&file)?;
             if r.truncated {

@@ -170,6 +170,15 @@ pub fn sweep(args: SweepArgs) -> anyhow::Result<ExitCode> {
         Progress::Error(e) => bar.suspend(|| eprintln!("  error: {e}")),
     })?;
     bar.finish_and_clear();
+    if shard.is_none() {
+        // Shards write no page: `weft sweep --collect` makes it of the whole.
+        let c = crate::sweep::collect::read(out)?;
+        let page = crate::report::write(out, &crate::report::sweep::page(&c, out)?)?;
+        eprintln!(
+            "the sweep's page: {} (open it in a browser)",
+            page.display()
+        );
+    }
     eprintln!(
         "{} run, {} already done{}{}; collect with `weft sweep --collect {}`",
         outcome.ran,
@@ -220,6 +229,11 @@ fn collect_command(dir: &Path, args: &SweepArgs) -> anyhow::Result<ExitCode> {
         Format::Text
     };
     out!("{}", collect::render(&c.points, format));
+    let page = crate::report::write(dir, &crate::report::sweep::page(&c, dir)?)?;
+    eprintln!(
+        "the sweep's page: {} (open it in a browser)",
+        page.display()
+    );
     if !c.missing.is_empty() {
         eprintln!(
             "{} of {} points not finished: {}",

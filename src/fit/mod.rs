@@ -327,6 +327,7 @@ impl Fit {
             seed: self.seed,
             method: self.method,
             frames: self.frames,
+            seconds: Some(self.seconds),
         }
     }
 
@@ -467,6 +468,38 @@ pub struct Manifest {
     pub method: Method,
     /// Frames per run.
     pub frames: u64,
+    /// Simulated seconds per run (absent from a fit made before weft kept
+    /// them: `frames` says the same).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seconds: Option<f32>,
+}
+
+impl Request {
+    /// The request a manifest records (to make the fit's report again).
+    pub fn of_manifest(m: &Manifest) -> Result<Self, load::OverrideError> {
+        Ok(Self {
+            preset: m.preset.clone(),
+            base: m.set.iter().map(|s| s.parse()).collect::<Result<_, _>>()?,
+            vary: m.vary.clone(),
+            reference: m.reference.as_ref().map(|r| PathBuf::from(&r.path)),
+            reference_weight: m.reference.as_ref().map_or(1.0, |r| r.weight),
+            targets: m.targets.clone(),
+            budget: m.budget,
+            seed: m.seed,
+            method: m.method,
+            seconds: m.seconds,
+        })
+    }
+}
+
+/// Reads the manifest of the fit in `dir`.
+pub fn read_manifest(dir: &Path) -> Result<Manifest, FitError> {
+    let path = dir.join(MANIFEST);
+    let text = std::fs::read_to_string(&path).map_err(file("reading", &path))?;
+    serde_json::from_str(&text).map_err(|e| FitError::Another {
+        dir: dir.into(),
+        what: format!("{MANIFEST} does not read: {e}"),
+    })
 }
 
 /// The reference in the manifest.
@@ -486,10 +519,12 @@ pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), FitError> {
     let path = dir.join(MANIFEST);
     match std::fs::read_to_string(&path) {
         Ok(text) => {
-            let old: Manifest = serde_json::from_str(&text).map_err(|e| FitError::Another {
+            let mut old: Manifest = serde_json::from_str(&text).map_err(|e| FitError::Another {
                 dir: dir.into(),
                 what: format!("{MANIFEST} does not read: {e}"),
             })?;
+            // A manifest from before weft kept the seconds: its frames decide.
+            old.seconds = old.seconds.or(manifest.seconds);
             if old == *manifest {
                 return Ok(());
             }

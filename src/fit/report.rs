@@ -31,8 +31,24 @@ fn number(v: f64) -> String {
 /// The table: every varied key and target figure, and the distance (with
 /// its terms against a reference), for the start, the fit and the reference.
 pub fn table(fit: &Fit, outcome: &Outcome) -> String {
-    let (Some(start), Some(best)) = (outcome.start(), outcome.best()) else {
+    let (Some(best), (header, rows)) = (outcome.best(), rows(fit, outcome)) else {
         return "no point was evaluated\n".into();
+    };
+    let ran = outcome.points.len();
+    format!(
+        "{}{} run(s) of a budget of {}; best at run #{} (generation {})\n",
+        grid(&header, &rows),
+        ran,
+        fit.budget,
+        best.index,
+        best.generation
+    )
+}
+
+/// The table's header and rows (none before a point is evaluated).
+pub fn rows(fit: &Fit, outcome: &Outcome) -> (Vec<String>, Vec<Vec<String>>) {
+    let (Some(start), Some(best)) = (outcome.start(), outcome.best()) else {
+        return (Vec::new(), Vec::new());
     };
     let reference = fit.reference.as_ref();
     let mut header = vec![
@@ -105,15 +121,7 @@ pub fn table(fit: &Fit, outcome: &Outcome) -> String {
         total.push("0".into());
     }
     rows.push(total);
-    let ran = outcome.points.len();
-    format!(
-        "{}{} run(s) of a budget of {}; best at run #{} (generation {})\n",
-        grid(&header, &rows),
-        ran,
-        fit.budget,
-        best.index,
-        best.generation
-    )
+    (header, rows)
 }
 
 /// Writes the fitted preset to `dir/fitted.toml` (`weft show` and
