@@ -3,6 +3,9 @@
 //! - [`solver`]: the paper's method; depends on neither Rerun nor egui.
 //! - [`scene`]: presets (TOML) and the scenes they describe: moving bodies,
 //!   wind, colliders, on top of the solver.
+//!
+//! Both are the library crate `weft-cloth` (`src/cloth/`), re-exported here;
+//! the rest is the application on top of it:
 //! - [`telemetry`]: streams a scene to Rerun; reads recordings back.
 //! - [`record`], [`replay`]: headless runs with CI verdicts, and their
 //!   bit-for-bit reproduction.
@@ -33,7 +36,6 @@ pub mod interrupt;
 pub mod record;
 pub mod replay;
 pub mod report;
-pub mod scene;
-pub mod solver;
+pub use weft_cloth::{scene, solver};
 pub mod sweep;
 pub mod telemetry;

@@ -194,7 +194,7 @@ fn paths_in(code: &str) -> Vec<String> {
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("src/solver is readable") {
+    for entry in std::fs::read_dir(dir).expect("a source directory is readable") {
         let path = entry.expect("a directory entry").path();
         if path.is_dir() {
             rust_files(&path, out);
@@ -204,11 +204,26 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
+/// The modules of the cloth library (the crate `weft-cloth`, in
+/// `src/cloth/`), which the `weft` crate re-exports.
+const CLOTH: [&str; 2] = ["solver", "scene"];
+
+/// Where a module's source is: `src/cloth/` for the cloth library's, `src/`
+/// for the rest.
+fn source_root(module: &str) -> PathBuf {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    if CLOTH.contains(&module) {
+        src.join("cloth")
+    } else {
+        src
+    }
+}
+
 /// Every `.rs` file under `src/<module>/` (or `src/<module>.rs`), with how
 /// many modules below `module` each file's module is: `mod.rs` is the
 /// module itself (0), `x.rs` and `a/mod.rs` are 1, `a/x.rs` is 2.
 fn module_files(module: &str) -> Vec<(PathBuf, usize)> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let src = source_root(module);
     let file = src.join(format!("{module}.rs"));
     if file.is_file() {
         return vec![(file, 0)];
@@ -234,15 +249,20 @@ fn module_files(module: &str) -> Vec<(PathBuf, usize)> {
 #[test]
 fn every_module_uses_only_the_layers_below_it() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    // Every module of the crate is in the table.
-    let mut modules: Vec<String> = std::fs::read_dir(&src)
-        .expect("src is readable")
-        .map(|e| e.expect("an entry").path())
-        .filter_map(|p| {
-            let name = p.file_stem()?.to_str()?.to_string();
-            (p.is_dir() || name != "lib" && name != "main").then_some(name)
-        })
-        .collect();
+    // Every module of the two crates is in the table.
+    let entries = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .expect("src is readable")
+            .map(|e| e.expect("an entry").path())
+            .filter(|p| p.is_dir() || p.extension().is_some_and(|e| e == "rs"))
+            .filter_map(|p| {
+                let name = p.file_stem()?.to_str()?.to_string();
+                (!["lib", "main", "cloth", "examples"].contains(&name.as_str())).then_some(name)
+            })
+            .collect()
+    };
+    let mut modules = entries(&src);
+    modules.extend(entries(&src.join("cloth")));
     modules.sort();
     let mut listed: Vec<String> = ALLOWED.iter().map(|(m, _)| m.to_string()).collect();
     listed.sort();
@@ -264,6 +284,41 @@ fn every_module_uses_only_the_layers_below_it() {
         "modules reach where their layer may not:\n{}",
         report.join("\n")
     );
+}
+
+/// The cloth library stands alone: none of the debugger's crates (Rerun,
+/// egui, the command line, the fitting, the plots) nor `weft` itself among
+/// its dependencies (so none in its tree: `cargo tree -p weft-cloth`).
+#[test]
+fn the_cloth_library_depends_on_nothing_of_the_application() {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/cloth/Cargo.toml");
+    let text = std::fs::read_to_string(&manifest).expect("src/cloth/Cargo.toml");
+    let table: toml::Table = text.parse().expect("a manifest");
+    let deps = table["dependencies"].as_table().expect("[dependencies]");
+    let application = [
+        "weft",
+        "rerun",
+        "re_log",
+        "re_viewer",
+        "egui",
+        "eframe",
+        "tokio",
+        "image",
+        "clap",
+        "anyhow",
+        "indicatif",
+        "ctrlc",
+        "serde_json",
+        "argmin",
+        "argmin-math",
+        "rand_xoshiro",
+        "plotters",
+    ];
+    let found: Vec<&String> = deps
+        .keys()
+        .filter(|d| application.contains(&d.as_str()) || d.starts_with("re_"))
+        .collect();
+    assert!(found.is_empty(), "weft-cloth depends on {found:?}");
 }
 
 /// The checker itself finds what it must (so the test above can fail).

@@ -45,7 +45,8 @@ impl Manifest {
     pub fn write(&self, dir: &Path) -> Result<(), ReportError> {
         let path = dir.join(MANIFEST);
         let json = serde_json::to_string_pretty(self).expect("a manifest serializes");
-        std::fs::write(&path, json).map_err(|source| ReportError::Write { path, source })
+        crate::sweep::storage::write_shared(&path, json.as_bytes())?;
+        Ok(())
     }
 }
 

@@ -103,14 +103,9 @@ pub enum ReportError {
     /// A plot could not be drawn.
     #[error(transparent)]
     Plot(#[from] plot::PlotError),
-    /// The page could not be written.
-    #[error("writing {}: {source}", path.display())]
-    Write {
-        /// The page.
-        path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
-    },
+    /// The page (or the comparison's manifest) could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::sweep::storage::FileError),
     /// The directory holds none of the results a page is made of.
     #[error(
         "{}: no finished sweep, fit or comparison here (no sweep.json, fit.json or compare.json); \
@@ -133,13 +128,7 @@ pub enum ReportError {
 /// reader never sees half a page); returns its path.
 pub fn write(dir: &Path, html: &str) -> Result<PathBuf, ReportError> {
     let path = dir.join(REPORT);
-    let tmp = dir.join(format!("{REPORT}.part.{}", std::process::id()));
-    let failed = |source| ReportError::Write {
-        path: path.clone(),
-        source,
-    };
-    std::fs::write(&tmp, html).map_err(failed)?;
-    std::fs::rename(&tmp, &path).map_err(failed)?;
+    crate::sweep::storage::write_shared(&path, html.as_bytes())?;
     Ok(path)
 }
 

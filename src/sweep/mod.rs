@@ -30,7 +30,9 @@
 
 pub mod collect;
 pub mod grid;
+mod manifest;
 pub mod shard;
+pub mod storage;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -43,7 +45,10 @@ use crate::record::{Check, Figures, Run, verdict};
 use crate::scene::{Loaded, Override, Scene, load};
 use crate::telemetry::{self, Telemetry, blueprint};
 use grid::{Axis, Point};
+pub use manifest::{Manifest, ManifestAxis, ManifestPoint, prepare};
 use shard::Shard;
+pub use storage::part_path;
+use storage::{FileError, file, write_atomically};
 
 /// Above this many points (in this shard), a sweep asks for `--yes`.
 pub const MAX_POINTS: usize = 256;
@@ -91,46 +96,6 @@ impl std::fmt::Debug for Measurement {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("Measurement")
     }
-}
-
-/// The manifest, `sweep.json`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Manifest {
-    /// The weft that wrote it, with its solver revision
-    /// ([`crate::solver::version`]): points of another solver are not mixed in.
-    pub weft: String,
-    /// The preset.
-    pub preset: String,
-    /// Frames per point, if fixed.
-    pub frames: Option<u64>,
-    /// Seconds per point, if given.
-    pub seconds: Option<f32>,
-    /// Telemetry level.
-    pub level: String,
-    /// The axes: key and values as written.
-    pub axes: Vec<ManifestAxis>,
-    /// Every point.
-    pub points: Vec<ManifestPoint>,
-}
-
-/// One axis in the manifest.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ManifestAxis {
-    /// Dotted key.
-    pub key: String,
-    /// Values, as written.
-    pub values: Vec<String>,
-}
-
-/// One point in the manifest.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ManifestPoint {
-    /// Index in grid order.
-    pub index: usize,
-    /// Name (of its files).
-    pub name: String,
-    /// Key → value, as written.
-    pub settings: Vec<(String, String)>,
 }
 
 /// What a finished point wrote to `NAME.json`.
@@ -315,14 +280,6 @@ impl Plan {
 /// How many points [`Plan::estimate`] times.
 pub const SAMPLES: usize = 6;
 
-/// Writes `bytes` to `path` through `path.part` and a rename, so `path`
-/// exists only complete.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
-    let part = part_path(path);
-    std::fs::write(&part, bytes).map_err(file("writing", &part))?;
-    std::fs::rename(&part, path).map_err(file("renaming into place", &part))
-}
-
 /// Why a sweep could not be planned, run or written.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
@@ -343,15 +300,8 @@ pub enum SweepError {
         source: Box<crate::scene::PresetError>,
     },
     /// A file or directory that could not be written.
-    #[error("{action} {}: {source}", path.display())]
-    File {
-        /// What was being done (`writing`, `cannot create`, …).
-        action: &'static str,
-        /// The file or directory.
-        path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    File(#[from] FileError),
     /// A manifest that is not a sweep's.
     #[error("{}: not a weft sweep manifest ({source}); use another --out", path.display())]
     Manifest {
@@ -395,68 +345,6 @@ pub enum SweepError {
     /// Rerun's batching could not be set up.
     #[error(transparent)]
     Batching(#[from] rerun::log::ChunkBatcherError),
-}
-
-/// A [`SweepError::File`] for `action` on `path`, from the system's error.
-fn file(action: &'static str, path: &Path) -> impl FnOnce(std::io::Error) -> SweepError {
-    let path = path.to_path_buf();
-    move |source| SweepError::File {
-        action,
-        path,
-        source,
-    }
-}
-
-/// `NAME.rrd` → `NAME.rrd.part`.
-pub fn part_path(path: &Path) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(".part");
-    PathBuf::from(s)
-}
-
-/// Creates `dir` and writes the manifest, or checks that the one there is
-/// this sweep's. Nothing in `dir` is removed or overwritten otherwise.
-pub fn prepare(dir: &Path, manifest: &Manifest) -> Result<(), SweepError> {
-    std::fs::create_dir_all(dir).map_err(file("cannot create", dir))?;
-    let path = dir.join(MANIFEST);
-    let json = serde_json::to_string_pretty(manifest).expect("manifest serializes");
-    match std::fs::read_to_string(&path) {
-        Ok(old) => {
-            let old: Manifest =
-                serde_json::from_str(&old).map_err(|source| SweepError::Manifest {
-                    path: path.clone(),
-                    source,
-                })?;
-            if old != *manifest {
-                let what = if old.weft != manifest.weft {
-                    format!(
-                        "written by weft {}, this is weft {}: its results may differ",
-                        old.weft, manifest.weft
-                    )
-                } else if old.preset != manifest.preset {
-                    format!("preset {} instead of {}", old.preset, manifest.preset)
-                } else if old.axes != manifest.axes {
-                    "other --set values".to_string()
-                } else if old.points != manifest.points {
-                    "other points".to_string()
-                } else {
-                    "other frames, seconds or level".to_string()
-                };
-                return Err(SweepError::Another {
-                    dir: dir.into(),
-                    what,
-                });
-            }
-            Ok(())
-        }
-        Err(_) => {
-            // Several shards may start at once: each writes through its own
-            // temporary name, and the renames all put the same bytes in place.
-            let tmp = dir.join(format!(".{MANIFEST}.{}", std::process::id()));
-            std::fs::write(&tmp, &json).map_err(file("cannot write in", dir))?;
-            std::fs::rename(&tmp, &path).map_err(file("writing", &path))
-        }
-    }
 }
 
 /// Whether the point's files are complete.

@@ -16,7 +16,7 @@
 //! coordinates.
 //!
 //! ```
-//! use weft::scene::{Scene, load};
+//! use weft_cloth::scene::{Scene, load};
 //!
 //! let loaded = load::load("hanging_sheet", &[]).unwrap();
 //! let mut scene = Scene::new(&loaded.preset).unwrap();
@@ -37,7 +37,7 @@ use std::borrow::Cow;
 use glam::{DVec3, Vec3};
 
 pub use load::{Loaded, Override, PresetError};
-pub use preset::Preset;
+pub use preset::{FORMAT, Preset};
 pub use tuning::Tuning;
 
 use crate::solver::{
@@ -61,7 +61,20 @@ pub struct Scene {
     poses: Vec<Pose>,
     /// The body the origin moves with, if any.
     carrier: Option<usize>,
+    /// Where the host puts each body it drives ([`Scene::drive`]), in world
+    /// coordinates; `None` for a body its motion script moves.
+    driven: Vec<Option<Placement>>,
     frame: u64,
+}
+
+/// A body the scene does not have.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("no body {body}: the scene has {count} (indices 0 to {last}, in the preset's order)", last = .count.saturating_sub(1))]
+pub struct NoBody {
+    /// The index asked for.
+    pub body: usize,
+    /// How many bodies the scene has.
+    pub count: usize,
 }
 
 impl Scene {
@@ -140,6 +153,7 @@ impl Scene {
             placements,
             poses,
             carrier,
+            driven: vec![None; preset.bodies.len()],
             frame: 0,
         })
     }
@@ -157,8 +171,12 @@ impl Scene {
     ) -> Result<(), StepError> {
         let t0 = self.solver.time();
         let t1 = t0 + self.solver.params().dt as f64;
-        for (placement, m) in self.placements.iter_mut().zip(&mut self.motions) {
-            *placement = m.pose(t1);
+        let bodies = self.placements.iter_mut().zip(&mut self.motions);
+        for ((placement, m), host) in bodies.zip(&self.driven) {
+            *placement = match host {
+                Some(p) => *p,
+                None => m.pose(t1),
+            };
         }
         let origin = self.carrier.map_or(self.solver.frame().origin, |b| {
             self.placements[b].translation
@@ -190,6 +208,70 @@ impl Scene {
     pub fn to_world(&self, local: &[Vec3]) -> Vec<Vec3> {
         let frame = self.solver.frame();
         local.iter().map(|&p| frame.world(p).as_vec3()).collect()
+    }
+
+    /// Drives `body` from the host: at the end of the next step (and of
+    /// every step after, until [`Scene::release`]) it is at `placement`, in
+    /// world coordinates, instead of where its motion in the preset takes
+    /// it; the particles attached to it and its colliders follow. A host
+    /// calls it before each step with its own transform for that step's end
+    /// (a character's shoulders, a car). The body's velocity is what its
+    /// placements imply, step to step.
+    ///
+    /// ```
+    /// use weft_cloth::scene::{Placement, Scene, load};
+    /// use glam::{DVec3, Quat};
+    ///
+    /// let mut scene = Scene::new(&load::load("cape_runner", &[]).unwrap().preset).unwrap();
+    /// let runner = scene.body("runner").unwrap();
+    /// for frame in 0..30 {
+    ///     // The host's character walks along +x at 1.5 m/s.
+    ///     let x = 1.5 * (frame + 1) as f64 / 60.0;
+    ///     let at = Placement { translation: DVec3::new(x, 0.0, 0.0), rotation: Quat::IDENTITY };
+    ///     scene.drive(runner, at).unwrap();
+    ///     scene.step().unwrap();
+    /// }
+    /// assert!((scene.body_placements()[runner].translation.x - 0.75).abs() < 1e-9);
+    /// ```
+    pub fn drive(&mut self, body: usize, placement: Placement) -> Result<(), NoBody> {
+        let count = self.driven.len();
+        let slot = self.driven.get_mut(body).ok_or(NoBody { body, count })?;
+        *slot = Some(placement);
+        Ok(())
+    }
+
+    /// Hands `body` back to its motion in the preset (evaluated at each
+    /// step's end time, as if it had never been driven).
+    pub fn release(&mut self, body: usize) -> Result<(), NoBody> {
+        let count = self.driven.len();
+        let slot = self.driven.get_mut(body).ok_or(NoBody { body, count })?;
+        *slot = None;
+        Ok(())
+    }
+
+    /// The index of the body named `name` in the preset, if there is one.
+    pub fn body(&self, name: &str) -> Option<usize> {
+        self.preset.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Adds a collider of the host's, in world coordinates or moving with a
+    /// body (drive that body to move it). It acts from the next step on.
+    pub fn add_collider(&mut self, collider: Collider) -> Result<(), SetupError> {
+        self.solver.add_collider(collider)
+    }
+
+    /// Each particle's normal (its element's local +Z), unit length; the
+    /// same in world coordinates as in the solver's (the floating origin
+    /// only moves).
+    pub fn normals(&self) -> Vec<Vec3> {
+        let s = self.solver.state();
+        (0..s.len()).map(|i| s.normal(i)).collect()
+    }
+
+    /// The cloth's triangles, as indices into the positions: two a cell of
+    /// the woven grid.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.solver.topology().triangles
     }
 
     /// The body the origin moves with, if any (the one most of the cloth's

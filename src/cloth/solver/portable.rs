@@ -14,13 +14,13 @@
 //! the `libm` crate: musl's algorithms written in Rust, in IEEE arithmetic
 //! alone. glam's rotations about an axis and its Euler angles call the
 //! platform's sine too, so this module builds them as well. The kernels use
-//! weft's own [`atan`](super::constraints) and Eq. 3's
+//! weft's own `atan` (`kernels::lanes::math`) and Eq. 3's
 //! [`exp`](super::forced_rotation), for speed, which are portable in the same
 //! way. `clippy.toml` disallows the platform's versions, so a new call to
 //! one fails `cargo clippy`.
 //!
 //! ```
-//! use weft::solver::portable;
+//! use weft_cloth::solver::portable;
 //!
 //! let q = portable::rotation_z(std::f32::consts::FRAC_PI_2);
 //! assert!((q * glam::Vec3::X).abs_diff_eq(glam::Vec3::Y, 1e-6));

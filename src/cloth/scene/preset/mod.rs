@@ -39,10 +39,23 @@ pub fn euler(deg: EulerDegrees) -> Quat {
     portable::euler_xyz(x, y, z)
 }
 
+/// The preset format this weft reads and writes. A preset names the format
+/// it was written in (`format = 1`; a preset without the key is read as the
+/// first); one written in a later format is refused, saying so, rather than
+/// read wrong. Raised when a key changes its meaning or goes away.
+pub const FORMAT: u32 = 1;
+
+fn current_format() -> u32 {
+    FORMAT
+}
+
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Preset {
+    /// The preset format it was written in ([`FORMAT`]).
+    #[serde(default = "current_format")]
+    pub format: u32,
     /// One line shown by `weft presets`.
     pub description: String,
     /// A preset this one builds on (a shipped name or a path relative to this

@@ -8,7 +8,7 @@
 //! 1. **update** ([`update`]): every particle moves on its own by Störmer
 //!    integration with damping `k`, under gravity and wind on its face;
 //!    driven particles follow their attachment exactly.
-//! 2. **adjust** ([`adjust`], [`families`]): `iterations` sweeps over the
+//! 2. **adjust** (`adjust`, [`families`]): `iterations` sweeps over the
 //!    families of geometric constraints between neighbours, each weighted
 //!    by its `λ`, in the order [`Family::ALL`] lists them: the surface
 //!    families (the paper's, and facing, weft's own: each element turns to
@@ -30,7 +30,7 @@
 //! UI; [`diagnostics`] exposes what they need.
 //!
 //! ```
-//! use weft::solver::{ClothSpec, Environment, Params, Pose, Solver};
+//! use weft_cloth::solver::{ClothSpec, Environment, Params, Pose, Solver};
 //!
 //! let spec = ClothSpec { weft: 8, warp: 8, ..ClothSpec::default() };
 //! let mut solver = Solver::new(spec, Params::default(), &[Pose::IDENTITY]).unwrap();

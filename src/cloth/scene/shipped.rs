@@ -15,7 +15,7 @@ macro_rules! shipped {
         /// Every shipped preset, in the order `weft presets` lists them.
         pub const ALL: &[Shipped] = &[$(Shipped {
             name: $name,
-            text: include_str!(concat!("../../presets/", $name, ".toml")),
+            text: include_str!(concat!("../../../presets/", $name, ".toml")),
         }),*];
     };
 }

@@ -55,6 +55,21 @@ const ROAD: Range = Range::new(-1e6, 1e6).unit(" m");
 impl Preset {
     /// Checks every range and reference; returns the first problem.
     pub fn validate(&self) -> Result<(), Invalid> {
+        if !(1..=super::FORMAT).contains(&self.format) {
+            return Err(Invalid::new(
+                "format",
+                format!(
+                    "preset format {} is not one this weft reads (1 to {}): {}",
+                    self.format,
+                    super::FORMAT,
+                    if self.format > super::FORMAT {
+                        "it was written by a newer weft; update weft to load it"
+                    } else {
+                        "formats start at 1"
+                    }
+                ),
+            ));
+        }
         Range::new(0.0, 86_400.0)
             .unit(" s")
             .check("duration", self.duration)?;

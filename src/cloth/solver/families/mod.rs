@@ -2,7 +2,7 @@
 //!
 //! A family is one kind of geometric constraint with its own weight `λ`,
 //! violation measure, corrections, colour and timing. Each implements
-//! [`ConstraintFamily`] in its own file here, beside its kernel; the list
+//! `ConstraintFamily` in its own file here, beside its kernel; the list
 //! at the bottom of this file names them once, in the order a sweep
 //! projects them, and everything else (the solver's sweep,
 //! presets and their validation, telemetry paths and plots, the panel's
@@ -44,7 +44,7 @@
 //! the same fraction.
 //!
 //! **Adding a family**: a file here with a type implementing
-//! [`ConstraintFamily`] (its kernel beside it), one line in the list, and
+//! `ConstraintFamily` (its kernel beside it), one line in the list, and
 //! its tests. See ARCHITECTURE.md ("How to add a constraint family").
 
 mod measure;
@@ -219,7 +219,7 @@ macro_rules! families {
             }
 
             /// Whether its violation is measured only while it is on
-            /// ([`ConstraintFamily::MEASURED_ONLY_WHILE_ON`]).
+            /// (`ConstraintFamily::MEASURED_ONLY_WHILE_ON`).
             pub fn measured_only_while_on(self) -> bool {
                 match self {
                     $(Family::$name => <$module::$name as ConstraintFamily>::MEASURED_ONLY_WHILE_ON,)*

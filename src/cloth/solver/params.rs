@@ -18,7 +18,7 @@ use super::families::{Family, PerFamily};
 /// substeps and resolution: `λ = 0` turns the family off, `λ = 1` makes it
 /// rigid, and in between its compliance (inverse stiffness, XPBD's `α`) is
 /// [`compliance_factor`]`(λ)` times the family's reference compliance
-/// ([`ConstraintFamily::REFERENCE_COMPLIANCE`]): `((1 − λ) / λ)²`, so `λ = ½` is the
+/// (`ConstraintFamily::REFERENCE_COMPLIANCE`): `((1 − λ) / λ)²`, so `λ = ½` is the
 /// reference material and each step of 0.1 around it is about a factor of
 /// two in stiffness. See `docs/method.md` ("Weights").
 /// The defaults are [`PerFamily::default_weights`].

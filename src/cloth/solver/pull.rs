@@ -28,7 +28,7 @@
 //!
 //! ```
 //! use glam::{DVec3, Vec3};
-//! use weft::solver::pull::Pull;
+//! use weft_cloth::solver::pull::Pull;
 //!
 //! let pull = Pull { particle: 0, target: DVec3::new(1.0, 0.0, 0.0), stiffness: 1e9 };
 //! let mut x = [Vec3::ZERO];

@@ -18,8 +18,8 @@
 //! are.
 //!
 //! ```
-//! use weft::scene::{Tuning, load};
-//! use weft::solver::Family;
+//! use weft_cloth::scene::{Tuning, load};
+//! use weft_cloth::solver::Family;
 //!
 //! let mut preset = load::load("flag_on_car", &[]).unwrap().preset;
 //! let mut tuning = Tuning::of(&preset);

@@ -37,7 +37,7 @@ impl Solver {
 
     /// [`Solver::step_with`], the origin moving to `origin` (world
     /// coordinates) over the step, steadily, and `bodies` measured from it
-    /// there ([`frame`]). A scene moves the origin with what carries the
+    /// there ([`super::frame`]). A scene moves the origin with what carries the
     /// cloth, so that neither where the cloth is nor how fast it is carried
     /// changes a bit of how it moves.
     pub fn step_in_frame(
