@@ -323,3 +323,64 @@ fn an_idle_window_stays_flat_and_cheap() {
     );
     assert!(cpu < 0.10, "{:.1} % of a core while idle", cpu * 100.0);
 }
+
+/// `weft view` opens a recording in the embedded viewer with the layout it
+/// carries: a car flag recorded at level full shows its sand mesh in the 3D
+/// view, with no panel (nothing runs). A file that is not a recording is refused
+/// before any window opens.
+#[test]
+fn weft_view_opens_a_recording_with_its_layout() {
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("flag.rrd");
+    let rec = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args([
+            "record",
+            "flag_on_car",
+            "--frames",
+            "60",
+            "--level",
+            "full",
+            "--save",
+        ])
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    assert!(rec.status.success(), "{rec:?}");
+    let shot = dir.path().join("view.png");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1600x1000x24"])
+        .arg(env!("CARGO_BIN_EXE_weft"))
+        .arg("view")
+        .arg(&rrd)
+        .arg("--screenshot")
+        .arg(&shot)
+        .env_remove("WAYLAND_DISPLAY")
+        .current_dir(dir.path())
+        .output()
+        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "weft view failed:\n{stderr}");
+    assert!(stderr.contains("saved the window"), "{stderr}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!((img.width(), img.height()), (1400, 860));
+    let cloth = share(&img, (0.1, 0.5), (0.1, 0.7), sand);
+    assert!(cloth > 3e-3, "no cloth in the view ({cloth})");
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
+        let target = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/snapshots/view.png");
+        std::fs::copy(&shot, target).unwrap();
+    }
+
+    let text = dir.path().join("notes.rrd");
+    std::fs::write(&text, "not a recording").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .arg("view")
+        .arg(&text)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("notes.rrd: not a Rerun recording"),
+        "{stderr}"
+    );
+}

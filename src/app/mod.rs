@@ -11,7 +11,8 @@
 //! - [`ruler`]: a drag on the viewer's time ruler scrubs instead of making
 //!   a loop selection;
 //! - `driver`: a warning at start for a graphics driver known to leak
-//!   memory while the window plays.
+//!   memory while the window plays;
+//! - `view`: `weft view`, recordings opened in the same viewer.
 //!
 //! The viewer is fed in-process: every message of the session's recording
 //! streams goes into a `re_log_channel` that the embedded viewer reads, so
@@ -26,6 +27,9 @@ pub mod preset_diff;
 pub mod pull;
 pub mod ruler;
 pub mod session;
+mod view;
+
+pub use view::view;
 
 use std::path::PathBuf;
 use std::rc::Rc;
@@ -170,46 +174,95 @@ impl WeftApp {
             }
             Shot::Settling(n) => *n -= 1,
             Shot::Requested => {
-                let image = ctx.input(|i| {
-                    i.raw.events.iter().find_map(|e| match e {
-                        egui::Event::Screenshot {
-                            image, user_data, ..
-                        } if user_data
-                            .data
-                            .as_ref()
-                            .is_some_and(|d| d.is::<WeftScreenshot>()) =>
-                        {
-                            Some(image.clone())
-                        }
-                        _ => None,
-                    })
-                });
-                if let Some(image) = image {
-                    let [w, h] = image.size;
-                    let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
-                    let saved = image::RgbaImage::from_raw(w as u32, h as u32, bytes)
-                        .map(|img| img.save(&shot.path));
-                    match saved {
-                        Some(Ok(())) => eprintln!(
-                            "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation",
-                            self.session.status().frame,
-                            shot.path.display(),
-                            self.lag
-                        ),
-                        Some(Err(e)) => {
-                            re_log::error!("cannot save {}: {e}", shot.path.display());
-                            std::process::exit(2);
-                        }
-                        None => {
-                            re_log::error!("egui's screenshot has the wrong size");
-                            std::process::exit(2);
-                        }
-                    }
+                if let Some(image) = shot_taken(ctx) {
+                    let [w, h] = save_png(&image, &shot.path);
+                    eprintln!(
+                        "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation",
+                        self.session.status().frame,
+                        shot.path.display(),
+                        self.lag
+                    );
                     ctx.send_viewport_cmd(egui::ViewportCommand::Close);
                 }
             }
         }
         ctx.request_repaint();
+    }
+}
+
+/// The embedded viewer, set up in the window being created (with a warning
+/// for a graphics driver known to leak).
+fn viewer_app(
+    token: re_viewer::MainThreadToken,
+    startup: re_viewer::StartupOptions,
+    cc: &eframe::CreationContext<'_>,
+) -> Result<re_viewer::App, Box<dyn std::error::Error + Send + Sync>> {
+    re_viewer::customize_eframe_and_setup_renderer(cc)?;
+    let render = cc.wgpu_render_state.as_ref();
+    if let Some(w) = render.and_then(|r| driver::warning(&r.adapter.get_info())) {
+        eprintln!("warning: {w}");
+    }
+    Ok(re_viewer::App::new(
+        token,
+        re_viewer::build_info(),
+        re_viewer::AppEnvironment::Custom("weft".into()),
+        startup,
+        cc,
+        None,
+        re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
+    ))
+}
+
+/// The window's options: weft's id and size. For a screenshot, the window
+/// opens as it would the first time, whatever the last window on this
+/// machine left: it reads and writes its state (the window's size, egui's
+/// memory) in a scratch file of its own, not the user's, returned to be
+/// removed.
+fn window_options(screenshot: bool) -> (eframe::NativeOptions, Option<PathBuf>) {
+    let mut options = re_viewer::native::eframe_options(None);
+    options.viewport = options
+        .viewport
+        .with_app_id("weft")
+        .with_inner_size([1400.0, 860.0]);
+    let scratch = screenshot
+        .then(|| std::env::temp_dir().join(format!("weft-screenshot-{}.ron", std::process::id())));
+    options.persistence_path = scratch.clone();
+    (options, scratch)
+}
+
+/// The picture egui took for [`WeftScreenshot`], once it has arrived.
+fn shot_taken(ctx: &egui::Context) -> Option<std::sync::Arc<egui::ColorImage>> {
+    ctx.input(|i| {
+        i.raw.events.iter().find_map(|e| match e {
+            egui::Event::Screenshot {
+                image, user_data, ..
+            } if user_data
+                .data
+                .as_ref()
+                .is_some_and(|d| d.is::<WeftScreenshot>()) =>
+            {
+                Some(image.clone())
+            }
+            _ => None,
+        })
+    })
+}
+
+/// Saves egui's picture as a PNG and returns its size; a picture that
+/// cannot be saved ends the process with status 2, saying why.
+fn save_png(image: &egui::ColorImage, path: &std::path::Path) -> [usize; 2] {
+    let [w, h] = image.size;
+    let bytes: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
+    match image::RgbaImage::from_raw(w as u32, h as u32, bytes).map(|img| img.save(path)) {
+        Some(Ok(())) => [w, h],
+        Some(Err(e)) => {
+            re_log::error!("cannot save {}: {e}", path.display());
+            std::process::exit(2);
+        }
+        None => {
+            re_log::error!("egui's screenshot has the wrong size");
+            std::process::exit(2);
+        }
     }
 }
 
@@ -281,18 +334,7 @@ pub fn run(
     .map_err(anyhow::Error::msg)?;
     let panel = Panel::new(&session.status());
     let link = panel.link();
-    let mut options = re_viewer::native::eframe_options(None);
-    options.viewport = options
-        .viewport
-        .with_app_id("weft")
-        .with_inner_size([1400.0, 860.0]);
-    // A screenshot shows the window as it opens, whatever the last window
-    // on this machine left: it reads and writes its state (the window's
-    // size, egui's memory) in a scratch file of its own, not the user's.
-    let scratch = screenshot
-        .as_ref()
-        .map(|_| std::env::temp_dir().join(format!("weft-screenshot-{}.ron", std::process::id())));
-    options.persistence_path = scratch.clone();
+    let (options, scratch) = window_options(screenshot.is_some());
     let startup = re_viewer::StartupOptions {
         on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
         // A screenshot shows the window as it opens, not as last left.
@@ -303,20 +345,7 @@ pub fn run(
         "weft",
         options,
         Box::new(move |cc| {
-            re_viewer::customize_eframe_and_setup_renderer(cc)?;
-            let render = cc.wgpu_render_state.as_ref();
-            if let Some(w) = render.and_then(|r| driver::warning(&r.adapter.get_info())) {
-                eprintln!("warning: {w}");
-            }
-            let mut viewer = re_viewer::App::new(
-                main_thread_token,
-                re_viewer::build_info(),
-                re_viewer::AppEnvironment::Custom("weft".into()),
-                startup,
-                cc,
-                None,
-                re_viewer::AsyncRuntimeHandle::from_current_tokio_runtime_or_wasmbindgen()?,
-            );
+            let mut viewer = viewer_app(main_thread_token, startup, cc)?;
             viewer.add_log_receiver(rx);
             viewer.extend_view_class(SpatialView3D::identifier(), |r| {
                 r.register_context_system::<pull::Probe>()

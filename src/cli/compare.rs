@@ -86,7 +86,7 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         drop(rec);
         if let Some(path) = &save {
             outln!(
-                "\ncomparison written to {} (open it with `rerun {}`)",
+                "\ncomparison written to {} (open it with `weft view {}`)",
                 path.display(),
                 path.display()
             );

@@ -215,7 +215,7 @@ pub fn fit(args: FitArgs) -> anyhow::Result<ExitCode> {
     let comparison = report::write_comparison(&fit, &outcome, out_dir, &table)?;
     write_page(&fit, &outcome, out_dir)?;
     eprintln!(
-        "fitted preset: {} (weft show {0}; weft gui {0})\ncomparison of {}: {} (rerun {2})",
+        "fitted preset: {} (weft show {0}; weft gui {0})\ncomparison of {}: {} (weft view {2})",
         fitted.display(),
         if fit.reference.is_some() {
             "the start, the fit and the reference"

@@ -67,6 +67,8 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
     /// Search live keys for the values that bring a preset closest to a reference run or target figures.
     Fit(fit::FitArgs),
+    /// Open recordings in the embedded Rerun viewer, each with the layout weft gave it.
+    View(ViewArgs),
     /// Make the page of a sweep's, a fit's or a comparison's results (DIR/report.html, with plots).
     #[command(after_help = "\
 The commands write this page themselves as they finish (weft sweep, weft sweep --collect,
@@ -94,6 +96,19 @@ pub struct GuiArgs {
     /// Frames to play before the screenshot.
     #[arg(long, value_name = "N", default_value_t = 60, requires = "screenshot")]
     pub frames: u64,
+}
+
+/// Options of `weft view`.
+#[derive(Debug, Args)]
+pub struct ViewArgs {
+    /// Recordings (`.rrd`) written by weft (`record`, `sweep`, `compare`,
+    /// `fit`, the window's sessions) or any Rerun 0.36 recording.
+    #[arg(required = true, value_name = "FILE.rrd")]
+    pub files: Vec<PathBuf>,
+    /// Save a screenshot of the window to this PNG file a few seconds after
+    /// it opens, and quit (for checking, e.g. under Xvfb).
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
 }
 
 /// Options of `weft record`.
@@ -216,6 +231,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Compare(args) => compare::compare(args),
         Command::Sweep(args) => sweep::sweep(args),
         Command::Fit(args) => fit::fit(args),
+        Command::View(args) => view(args),
         Command::Report { dir } => {
             let (kind, path) = crate::report::from_dir(&dir)?;
             eprintln!(
@@ -279,6 +295,37 @@ fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
     });
     crate::app::run(&args.preset, &args.set, screenshot)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// `weft view`: every file is checked before the window opens.
+fn view(args: ViewArgs) -> anyhow::Result<ExitCode> {
+    for f in &args.files {
+        let mut magic = [0u8; 4];
+        let read =
+            std::fs::File::open(f).and_then(|mut h| std::io::Read::read_exact(&mut h, &mut magic));
+        match read {
+            Err(e) => bail!("{}: {e}", f.display()),
+            Ok(()) if &magic != b"RRF2" => bail!(
+                "{}: not a Rerun recording (an .rrd from weft record, sweep, compare, fit or the window)",
+                f.display()
+            ),
+            Ok(()) => {}
+        }
+    }
+    open_view(&args)
+}
+
+#[cfg(feature = "viewer")]
+fn open_view(args: &ViewArgs) -> anyhow::Result<ExitCode> {
+    crate::app::view(&args.files, args.screenshot.as_deref())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(not(feature = "viewer"))]
+fn open_view(_args: &ViewArgs) -> anyhow::Result<ExitCode> {
+    anyhow::bail!(
+        "this weft was built without the desktop debugger (feature `viewer`); rebuild with default features"
+    )
 }
 
 #[cfg(not(feature = "viewer"))]

@@ -91,7 +91,7 @@ pub fn page(runs: &[RunData], manifest: &Manifest, dir: &Path) -> Result<String,
                 format!(
                     "<b>{}</b>: {}, {} frames, {}; made by {}",
                     esc(&r.name),
-                    file_link(&r.path, "rerun"),
+                    file_link(&r.path, "weft view"),
                     r.last_frame(),
                     esc(&r.verdict()),
                     esc(r.rec.version.as_deref().unwrap_or("an unknown weft"))
@@ -103,7 +103,7 @@ pub fn page(runs: &[RunData], manifest: &Manifest, dir: &Path) -> Result<String,
     facts.push(("compared by", esc(&manifest.weft)));
     let comparison = dir.join(crate::fit::report::COMPARISON);
     if comparison.is_file() {
-        facts.push(("side by side", file_link(&comparison, "rerun")));
+        facts.push(("side by side", file_link(&comparison, "weft view")));
     }
     page.facts(&facts);
 

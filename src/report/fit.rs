@@ -107,7 +107,7 @@ pub fn page(fit: &Fit, outcome: &Outcome, dir: &Path) -> Result<String, ReportEr
                 .map(|r| {
                     format!(
                         "the reference {} (weight {})",
-                        file_link(&r.run.path, "rerun"),
+                        file_link(&r.run.path, "weft view"),
                         r.weight
                     )
                 })
@@ -164,7 +164,7 @@ pub fn page(fit: &Fit, outcome: &Outcome, dir: &Path) -> Result<String, ReportEr
     ] {
         let path = dir.join(file);
         if path.is_file() {
-            facts.push((what, file_link(&path, "rerun")));
+            facts.push((what, file_link(&path, "weft view")));
         }
     }
     page.facts(&facts);

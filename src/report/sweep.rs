@@ -338,7 +338,7 @@ pub fn page(c: &Collected, dir: &Path) -> Result<String, ReportError> {
     page.paragraph(&format!(
         "Each point's settings, figures and <code>[expect]</code> verdict, with its recording \
          (open one with {}).",
-        code("rerun FILE.rrd")
+        code("weft view FILE.rrd")
     ));
     let mut header: Vec<String> = vec!["point".into()];
     header.extend(axes.iter().map(|(k, _)| k.clone()));
