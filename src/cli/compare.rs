@@ -12,7 +12,7 @@ use crate::compare::gate::{self, Bound};
 use crate::compare::recording::{self, Placement};
 use crate::compare::{RunData, incomparable, read_all, report};
 use crate::report::compare::Manifest;
-use crate::report::sweep::shell;
+use crate::report::shell;
 
 /// Options of `weft compare`.
 #[derive(Debug, Args)]

@@ -300,17 +300,7 @@ fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
 /// `weft view`: every file is checked before the window opens.
 fn view(args: ViewArgs) -> anyhow::Result<ExitCode> {
     for f in &args.files {
-        let mut magic = [0u8; 4];
-        let read =
-            std::fs::File::open(f).and_then(|mut h| std::io::Read::read_exact(&mut h, &mut magic));
-        match read {
-            Err(e) => bail!("{}: {e}", f.display()),
-            Ok(()) if &magic != b"RRF2" => bail!(
-                "{}: not a Rerun recording (an .rrd from weft record, sweep, compare, fit or the window)",
-                f.display()
-            ),
-            Ok(()) => {}
-        }
+        telemetry::read::check(f)?;
     }
     open_view(&args)
 }

@@ -7,8 +7,7 @@ use std::sync::atomic::AtomicBool;
 
 use super::page::{Cell, Page, code, esc};
 use super::plot::{self, Labels, Mark, Series, number};
-use super::sweep::shell;
-use super::{ReportError, file_link};
+use super::{ReportError, file_link, shell};
 use crate::fit::report::{COMPARISON, FITTED};
 use crate::fit::{Evaluated, Fit, Halt, Outcome, Request};
 

@@ -194,6 +194,16 @@ pub fn rrd_cell(dir: &Path, file: &str) -> page::Cell {
     }
 }
 
+/// `s` quoted for a POSIX shell if it needs it.
+pub fn shell(s: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "._-/=,:+@".contains(c);
+    if !s.is_empty() && s.chars().all(plain) {
+        s.into()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
 /// A link to a file anywhere (absolute, so that it opens from the page
 /// wherever the page is), with the command that opens it.
 pub fn file_link(path: &Path, command: &str) -> String {
@@ -202,9 +212,6 @@ pub fn file_link(path: &Path, command: &str) -> String {
         "<a href=\"{}\">{}</a> ({})",
         page::esc(&abs.display().to_string()),
         page::esc(&path.display().to_string()),
-        page::code(&format!(
-            "{command} {}",
-            sweep::shell(&path.display().to_string())
-        ))
+        page::code(&format!("{command} {}", shell(&path.display().to_string())))
     )
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use super::page::{Cell, Page, code, esc};
 use super::plot::{self, Grid, Labels, Mark, Series, number};
-use super::{Figure, ReportError, figures, rrd_cell};
+use super::{Figure, ReportError, figures, rrd_cell, shell};
 use crate::compare::figure;
 use crate::sweep::PointResult;
 use crate::sweep::collect::Collected;
@@ -37,16 +37,6 @@ fn command(c: &Collected, dir: &Path) -> Option<String> {
         shell(&dir.display().to_string())
     );
     Some(s)
-}
-
-/// `s` quoted for a POSIX shell if it needs it.
-pub fn shell(s: &str) -> String {
-    let plain = |c: char| c.is_ascii_alphanumeric() || "._-/=,:+@".contains(c);
-    if !s.is_empty() && s.chars().all(plain) {
-        s.into()
-    } else {
-        format!("'{}'", s.replace('\'', r"'\''"))
-    }
 }
 
 /// The swept keys in order, each with its values in grid order.

@@ -163,6 +163,27 @@ pub enum ReadError {
     },
 }
 
+/// Checks that `path` is a Rerun recording by decoding its first message
+/// only (as [`read_all`] would: a file none of whose messages decodes is
+/// not one): what `weft view` asks before the window opens.
+pub fn check(path: &Path) -> Result<(), ReadError> {
+    let file = std::fs::File::open(path).map_err(|source| ReadError::Open {
+        path: path.into(),
+        source,
+    })?;
+    let not = |detail| ReadError::NotARecording {
+        path: path.into(),
+        detail,
+    };
+    let mut decoder = DecoderApp::decode_eager(std::io::BufReader::new(file))
+        .map_err(|e| not(Some(e.to_string())))?;
+    match decoder.next() {
+        Some(Ok(_)) => Ok(()),
+        Some(Err(e)) => Err(not(Some(e.to_string()))),
+        None => Err(not(None)),
+    }
+}
+
 /// Reads the one recording in a `.rrd` file. A file cut short (by a crash)
 /// reads up to its last complete message. A file holding several
 /// recordings is an error that says how many (use [`read_all`]).
