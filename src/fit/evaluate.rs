@@ -352,7 +352,7 @@ pub fn run(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Outcome, FitError> {
     prepare(dir, &fit.manifest())?;
-    let (reference, horizon) = reference_features(fit, dir)?;
+    let (reference, horizon) = reference_features(fit, dir, !dry)?;
     let eval = Evaluator {
         fit,
         dir,

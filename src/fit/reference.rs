@@ -24,11 +24,15 @@ struct CachedReference {
 
 /// The reference's features: re-runs its stored preset for the fit's
 /// simulated time (measured like every candidate), or reads them from
-/// `dir`'s cache. On the fitted preset's grid, also its shared states for
-/// short horizons (a run of the reference, cached or not).
+/// `dir`'s cache. With `states` (a fit that will run points), on the fitted
+/// preset's grid, also its shared states for short horizons (a run of the
+/// reference, cached or not); a fit that runs nothing (`--status`, `weft
+/// report`) finds the features in the cache without running the reference
+/// again (the cache is written the same either way).
 pub fn reference_features(
     fit: &Fit,
     dir: &Path,
+    states: bool,
 ) -> Result<(Option<Features>, Option<Arc<Horizon>>), FitError> {
     let Some(r) = &fit.reference else {
         return Ok((None, None));
@@ -51,7 +55,7 @@ pub fn reference_features(
         && c.frames == frames
         && c.lattice == lattice
     {
-        let horizon = if same_grid {
+        let horizon = if same_grid && states {
             measure::measure_with(preset, &fit.lattice, fit.seconds, true)
                 .map_err(|e| failed(e.to_string()))?
                 .1
