@@ -41,22 +41,18 @@ fn command(c: &Collected, dir: &Path) -> Option<String> {
 
 /// The swept keys in order, each with its values in grid order.
 fn axes(c: &Collected) -> Vec<(String, Vec<String>)> {
-    if let Some(m) = &c.manifest {
-        // A key with one value fixes it: nothing to plot against.
-        let mut out = Vec::new();
-        for a in &m.axes {
-            let mut values: Vec<String> = Vec::new();
-            for p in &m.points {
-                if let Some((_, v)) = p.settings.iter().find(|(k, _)| *k == a.key)
-                    && !values.contains(v)
-                {
-                    values.push(v.clone());
-                }
-            }
-            out.push((a.key.clone(), values));
-        }
-        return out;
+    if let Some(m) = &c.manifest
+        && !m.axes.is_empty()
+    {
+        // A point's settings are its axes' values, as written.
+        return m
+            .axes
+            .iter()
+            .map(|a| (a.key.clone(), a.values.clone()))
+            .collect();
     }
+    // A list of points (a fit's generation) or no manifest: the values the
+    // finished points hold, in their order.
     let mut out: Vec<(String, Vec<String>)> = Vec::new();
     for p in &c.points {
         for (k, v) in &p.settings {
