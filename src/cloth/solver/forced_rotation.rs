@@ -71,7 +71,7 @@ impl ForcedRotation {
         // by the violation, so without a division). Under `h` the right
         // side is negative (for Φ > 0) and the test fails without the
         // product, which for the tiny violations of a cloth at rest would be
-        // subnormal (see `cloth::FOURTH_ORDER`).
+        // subnormal (see `rotation::FOURTH_ORDER`).
         let below = violation < self.h && self.phi > 0.0;
         if !below && full * violation <= self.phi * (violation - self.h) {
             return full;

@@ -6,7 +6,8 @@
 
 use glam::Vec3;
 
-use super::diagnostics::{self, Orientation, Violation};
+use super::diagnostics::{self, Orientation};
+use super::families::Violation;
 use super::families::{self, Family, PerFamily};
 use super::{Solver, self_collision, team};
 

@@ -54,6 +54,8 @@ mod measure;
 pub mod params;
 pub mod portable;
 pub mod pull;
+pub mod range;
+pub mod rotation;
 pub mod self_collision;
 mod step;
 mod team;
@@ -62,12 +64,14 @@ pub mod update;
 
 pub use cloth::{ClothSpec, ClothState};
 pub use collision::{Collider, Pose, Shape};
-pub use diagnostics::{Diagnostics, Orientation, Violation};
-pub use families::{Family, PerFamily};
+pub use diagnostics::{Diagnostics, Orientation};
+pub use families::compliance_factor;
+pub use families::{Family, PerFamily, Violation};
 pub use forced_rotation::ForcedRotation;
 pub use frame::Frame;
-pub use params::{ParamError, Params, Range, RangeError, Weights, Width, compliance_factor};
+pub use params::{Params, Weights, Width};
 pub use pull::Pull;
+pub use range::{ParamError, Range, RangeError};
 pub use topology::Topology;
 pub use update::Environment;
 
@@ -103,7 +107,7 @@ use glam::{DVec3, Vec3};
 use collision::Contact;
 use diagnostics::CorrectionTrack;
 use families::{Multipliers, stretch};
-use self_collision::{Offsets, SelfContacts};
+use self_collision::SelfCollision;
 use update::FREE;
 
 /// A particle that follows a body exactly.
@@ -198,13 +202,8 @@ pub struct Solver {
     /// Per particle, the body damping measures its motion against.
     reference_body: Vec<u32>,
     multipliers: Multipliers,
-    self_contacts: SelfContacts,
-    /// How far each particle may move before the cloth could cross itself.
-    offsets: Offsets,
-    /// Scratch: where the sweeps took the particles, while they are clamped.
-    offset_target: Vec<Vec3>,
-    /// Substeps left that a jerk leaves unbounded ([`Solver::watch_for_jerks`]).
-    unbounded: u32,
+    /// Self-collision's state and stages ([`self_collision`]).
+    self_collision: SelfCollision,
     rest_position: Vec<Vec3>,
     // Scratch, kept to avoid allocating per step.
     sub_from: Vec<Pose>,
@@ -249,10 +248,7 @@ impl Solver {
             tethers_stale: false,
             reference_body: vec![FREE; n],
             multipliers: Multipliers::default(),
-            self_contacts: SelfContacts::default(),
-            offsets: Offsets::default(),
-            offset_target: Vec::new(),
-            unbounded: 0,
+            self_collision: SelfCollision::default(),
             rest_position: (0..spec.warp)
                 .flat_map(|j| (0..spec.weft).map(move |i| spec.rest_position(i, j)))
                 .collect(),
@@ -346,7 +342,7 @@ impl Solver {
                 bodies: self.bodies.len(),
             });
         }
-        params::Range::new(0.0, 10.0)
+        range::Range::new(0.0, 10.0)
             .of("μ")
             .check("collider.friction", collider.friction)?;
         self.colliders.push(collider);

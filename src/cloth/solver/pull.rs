@@ -40,7 +40,7 @@
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::params::{Range, RangeError};
+use super::range::{Range, RangeError};
 
 /// How far from the world's origin a target may be, per component (m).
 const TARGET: Range = Range::components(1e7).unit(" m");

@@ -3,7 +3,9 @@
 //! self-collision's contacts; and the checks that keep a failed step from
 //! leaving a broken state.
 
-use glam::DVec3;
+use std::time::{Duration, Instant};
+
+use glam::{DVec3, Vec3};
 
 use super::adjust::{Adjust, Colliders, LayerFriction};
 use super::collision::{self, Contact, Pose};
@@ -12,8 +14,21 @@ use super::families::{Family, Sets, Sweep};
 use super::forced_rotation::ForcedRotation;
 use super::frame::{Frame, FrameStep};
 use super::kernels::{Particles, Shared};
+use super::self_collision::Grid;
 use super::update::{self, Environment, FrameMotion, Reference};
-use super::{ClothState, NonFinite, PARALLEL_MIN_PARTICLES, Solver, StepError, team};
+use super::{Attachment, ClothState, NonFinite, PARALLEL_MIN_PARTICLES, Solver, StepError, team};
+
+/// The cloth as self-collision's stages read it ([`Grid`]), borrowing the
+/// solver's fields alone so that its positions can be lent beside it.
+macro_rules! grid {
+    ($solver:expr) => {
+        Grid {
+            topology: &$solver.topology,
+            spec: &$solver.spec,
+            inv_mass: &$solver.inv_mass,
+        }
+    };
+}
 
 impl Solver {
     /// Advances by `Δt`: the bodies move from their current poses to `bodies`.
@@ -65,11 +80,14 @@ impl Solver {
         let dt = self.params.substep_dt();
         let rot = self.forced_rotation();
         let frame = self.frame.step_to(origin, substeps, self.steps == 0);
+        self.self_collision.time_stages(self.diagnostics.is_some());
         if self.self_collision_on() {
-            self.watch_for_jerks(bodies, origin);
-            self.watch_for_crossings();
+            let changes = self.attachment_motion_changes(bodies, origin);
+            let (grid, x) = (grid!(self), &self.state.position);
+            self.self_collision
+                .start_step(grid, x, changes, self.params.substeps);
         } else {
-            self.offsets.clear();
+            self.self_collision.off();
         }
         if self.steps == 0 {
             self.start_with_carriers(bodies);
@@ -108,7 +126,8 @@ impl Solver {
         // shown, on or off); on, they are also its tangles.
         let crossings = self.diagnostics.is_some().then(|| {
             if self.self_collision_on() {
-                self.find_tangles()
+                let grid = grid!(self);
+                self.self_collision.tangles(grid, &self.state.position)
             } else {
                 self.self_crossing_points()
             }
@@ -123,6 +142,7 @@ impl Solver {
             let violations = self.violations_from(facing);
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.orientation = diagnostics::orientation(&offsets);
+            d.families[Family::SelfCollision].time += self.self_collision.take_time();
             d.self_crossings = crossings.as_ref().map(Vec::len);
             d.crossing_points = crossings.unwrap_or_default();
             for (fd, v) in d.families.iter_mut().zip(violations) {
@@ -153,12 +173,10 @@ impl Solver {
         last: bool,
     ) -> Result<(), NonFinite> {
         let bounded = self.self_collision_on();
-        if bounded && self.self_contacts.leave_tangles_this_substep() {
-            self.find_tangles();
-            self.untangle();
-        }
         if bounded {
-            self.begin_offsets();
+            let grid = grid!(self);
+            self.self_collision
+                .start_substep(grid, &mut self.state.position);
         }
         let t = self.stopwatch();
         let threads = self.threads();
@@ -194,8 +212,11 @@ impl Solver {
         }
         self.check_finite("update")?;
         self.charge(t, |d| &mut d.timings.update);
+        let pulled = self.pull.map(|p| p.particle);
         if bounded {
-            self.clamp_to_offsets(false);
+            let grid = grid!(self);
+            self.self_collision
+                .after_update(grid, &mut self.state.position, pulled);
         }
 
         self.collider_from.clear();
@@ -206,15 +227,17 @@ impl Solver {
             self.collider_to.push(c.pose_from(&self.sub_to, o1));
         }
         self.contacts.fill(Contact::default());
-        if self.self_collision_on() {
-            self.find_self_contacts();
+        if bounded {
+            let grid = grid!(self);
+            let (x, start) = (&self.state.position, &self.state.prev_position);
+            self.self_collision.find_contacts(grid, x, start, threads);
         } else {
-            self.self_contacts.clear();
+            self.self_collision.off();
         }
         let sets = Sets {
             topology: &self.topology,
             tethers: &self.tethers,
-            contacts: &self.self_contacts.set,
+            contacts: self.self_collision.contacts(),
         };
         self.multipliers.reset(&sets);
         let p = Particles::new(
@@ -240,13 +263,12 @@ impl Solver {
                 margin: 0.5 * self.spec.thickness,
                 contacts: Shared::new(&mut self.contacts),
             }),
-            friction: (!self.self_contacts.set.is_empty() && self.spec.friction > 0.0).then(|| {
-                LayerFriction {
-                    contacts: &self.self_contacts.set.items,
+            friction: (!self.self_collision.contacts().is_empty() && self.spec.friction > 0.0)
+                .then(|| LayerFriction {
+                    contacts: &self.self_collision.contacts().items,
                     start: &self.state.prev_position,
                     friction: self.spec.friction,
-                }
-            }),
+                }),
         };
         adjust.run(
             threads,
@@ -268,9 +290,7 @@ impl Solver {
             self.project_colliders(margin);
         }
         if bounded {
-            self.keep_edges_apart();
-            self.clamp_to_offsets(true);
-            self.colliders_last(margin);
+            self.end_self_collision_substep(pulled, margin);
         }
         // Turns leave quaternions unit to rounding only; renormalise once.
         for q in &mut self.state.orientation {
@@ -287,6 +307,59 @@ impl Solver {
             1
         } else {
             team::available()
+        }
+    }
+
+    /// Whether the self-collision family is on (its weight above 0).
+    pub(in crate::solver) fn self_collision_on(&self) -> bool {
+        self.params.weights[Family::SelfCollision] > 0.0
+    }
+
+    /// How much each attachment's motion over the step to `bodies` (and
+    /// `origin`: it may carry the attachments) differs from its motion
+    /// over the last step, in metres, in world coordinates; none at the
+    /// first step, whose cloth starts with its carriers' motion
+    /// (`start_with_carriers`): there is no earlier step to jerk from.
+    fn attachment_motion_changes(&self, bodies: &[Pose], origin: DVec3) -> Vec<f64> {
+        if self.steps == 0 {
+            return Vec::new();
+        }
+        let at = |poses: &[Pose], origin: DVec3, a: &Attachment| {
+            origin + poses[a.body].compose(&a.local).translation.as_dvec3()
+        };
+        self.attachments
+            .iter()
+            .map(|a| {
+                let before = at(&self.bodies_before, self.origin_before, a);
+                let from = at(&self.bodies, self.frame.origin, a);
+                let to = at(bodies, origin, a);
+                ((to - from) - (from - before)).length()
+            })
+            .collect()
+    }
+
+    /// Self-collision's substep end ([`SelfCollision::end_substep`]), with
+    /// the colliders' push (timed with the colliders) as its last word.
+    fn end_self_collision_substep(&mut self, pulled: Option<usize>, margin: f32) {
+        let grid = grid!(self);
+        let (colliders, poses) = (&self.colliders, &self.collider_to);
+        let (contacts, inv_mass) = (&mut self.contacts, &self.inv_mass);
+        let mut spent = self.diagnostics.is_some().then_some(Duration::ZERO);
+        let push = |x: &mut [Vec3]| {
+            if colliders.is_empty() {
+                return false;
+            }
+            let start = spent.is_some().then(Instant::now);
+            let moved = collision::project(x, inv_mass, colliders, poses, margin, contacts);
+            if let (Some(spent), Some(start)) = (spent.as_mut(), start) {
+                *spent += start.elapsed();
+            }
+            moved
+        };
+        self.self_collision
+            .end_substep(grid, &mut self.state.position, pulled, push);
+        if let (Some(d), Some(spent)) = (self.diagnostics.as_deref_mut(), spent) {
+            d.timings.collisions += spent;
         }
     }
 

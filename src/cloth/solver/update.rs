@@ -30,9 +30,10 @@
 use glam::{Quat, Vec3};
 
 use super::{
-    cloth::{ClothState, normal_of, rotate},
+    cloth::ClothState,
     collision::Pose,
     kernels::Shared,
+    rotation::{normal_of, rotate},
     team,
 };
 

@@ -32,7 +32,7 @@ use crate::solver::kernels::lanes::{self, Chunk, Lane};
 use crate::solver::kernels::{Particles, Recorder};
 use crate::solver::{forced_rotation::ForcedRotation, topology::Patch};
 use super::{ConstraintFamily, Measure, Sets, Sweep, zero};
-use crate::solver::diagnostics::Violation;
+use super::violation::Violation;
 use crate::solver::kernels::{Shared, kernel, project_batches};
 use crate::solver::team::Crew;
 

@@ -1,9 +1,9 @@
 //! Measuring the families' violations: over the whole cloth for the
 //! figures and plots, and per particle for colouring and inspecting.
 
+use super::violation::{Tally, Violation};
 use super::{Family, PerFamily};
 use crate::solver::cloth::{ClothSpec, ClothState};
-use crate::solver::diagnostics::{Tally, Violation};
 use crate::solver::team;
 use crate::solver::topology::{Batched, Pair, Topology, Triple};
 

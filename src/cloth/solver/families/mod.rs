@@ -49,15 +49,14 @@
 
 mod measure;
 mod per_family;
+mod violation;
 
 use std::fmt;
 
-use super::diagnostics::Violation;
 #[cfg(doc)]
 use super::forced_rotation::ForcedRotation;
 use super::forced_rotation::ForcedRotation as Eq3;
 use super::kernels::{Particles, Recorder, Shared};
-use super::params::compliance_factor;
 use super::self_collision::SelfContact;
 use super::team::Crew;
 use super::topology::{Batched, Topology};
@@ -65,6 +64,18 @@ use super::topology::{Batched, Topology};
 pub(crate) use measure::{Measure, each_pair, each_triple};
 pub use measure::{particle_violation, particle_violation_at, violation, violations};
 pub use per_family::{Entry, PerFamily};
+pub use violation::Violation;
+
+/// How a weight scales its family's reference compliance: `((1 − λ) / λ)²`
+/// (0 at `λ = 1`, 1 at `λ = ½`, unbounded as `λ → 0`).
+#[inline]
+pub fn compliance_factor(weight: f32) -> f32 {
+    if weight >= 1.0 {
+        return 0.0;
+    }
+    let r = (1.0 - weight) / weight.max(1e-6);
+    r * r
+}
 
 /// One family of constraints of the adjust phase: what it is called and
 /// drawn as, how stiff it is by default, the multipliers it keeps, how it

@@ -19,7 +19,7 @@
 use glam::Vec3;
 
 use super::{ConstraintFamily, Measure, Sets, Sweep, each_pair, measure::tally, stretch, zero};
-use crate::solver::diagnostics::Violation;
+use super::violation::Violation;
 use crate::solver::kernels::lanes::{self, Chunk, Lane};
 use crate::solver::kernels::{Particles, Recorder, Shared, kernel, project_batches};
 use crate::solver::team::Crew;

@@ -7,7 +7,7 @@
 //! measures the penetration of the pairs closer than the thickness.
 
 use super::{ConstraintFamily, Measure, Sets, Sweep, zero};
-use crate::solver::diagnostics::Violation;
+use super::violation::Violation;
 use crate::solver::kernels::{Recorder, Shared, kernel, project_batches};
 use crate::solver::self_collision::{self, for_each_close};
 use crate::solver::team::Crew;

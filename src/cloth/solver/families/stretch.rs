@@ -21,7 +21,7 @@
 use glam::Vec3;
 
 use super::{ConstraintFamily, Measure, Sets, Sweep, each_pair, measure::tally, zero};
-use crate::solver::diagnostics::Violation;
+use super::violation::Violation;
 use crate::solver::kernels::lanes::{self, Chunk, Lane};
 use crate::solver::kernels::{Particles, Recorder, Shared, kernel, project_batches};
 use crate::solver::team::Crew;

@@ -103,7 +103,7 @@ pub(crate) fn atan(t: f32) -> f32 {
 /// `t²` for the series of a small angle, from `max(|t|, 10⁻¹⁰)`: below
 /// `10⁻⁴` the series' factor rounds to exactly 1 whatever `t²` is, so the
 /// floor changes no result, and it keeps `t²` of a flat cloth's angles
-/// (`10⁻²⁰` and less) from being subnormal (see `cloth::FOURTH_ORDER`).
+/// (`10⁻²⁰` and less) from being subnormal (see `rotation::FOURTH_ORDER`).
 #[inline(always)]
 fn square_above_subnormal(a: f32) -> f32 {
     let a = a.max(SMALL_ANGLE_FLOOR);

@@ -22,11 +22,33 @@ use std::ops::Range;
 
 use glam::{Quat, Vec3};
 
-use super::cloth::turn_by;
+use super::rotation::turn_by;
 use super::team::Crew;
 #[cfg(doc)]
 use lanes::LANES;
-use lanes::{Array, Avx, Avx16, Lane, Sse, WIDE_LANES};
+use lanes::{Array, Lane, WIDE_LANES};
+
+/// Eight lanes of `wide`: two SSE registers (one AVX register in a build
+/// that enables AVX for every crate); its [`Lane`] is in `sse.rs`.
+pub(crate) type Sse = wide::f32x8;
+
+/// Eight lanes in one AVX register, for the copy of the kernels compiled
+/// for AVX2.
+#[cfg(target_arch = "x86_64")]
+pub(crate) type Avx = avx::F8;
+
+/// Sixteen lanes in two AVX registers, for the long batches' chunks in the
+/// copy of the kernels compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+pub(crate) type Avx16 = avx::F16;
+
+/// Elsewhere the AVX2 copy is never chosen; its kernels use [`Sse`].
+#[cfg(not(target_arch = "x86_64"))]
+pub(crate) type Avx = Sse;
+
+/// See [`Avx`].
+#[cfg(not(target_arch = "x86_64"))]
+pub(crate) type Avx16 = Sse;
 
 /// A slice that the threads of a parallel region write element by element.
 ///
@@ -206,8 +228,8 @@ pub(crate) fn delta_mu(c: f32, w: f32, alpha_t: f32, mu: f32) -> f32 {
 
 /// A kernel in every lane type: the same projection of a chunk of
 /// constraints (their items, their multipliers, how many are live, the
-/// recorder), once with [`lanes::Sse`], and with [`lanes::Avx`] and
-/// [`lanes::Avx16`] for [`project_range`]'s AVX2 copy. Made by [`kernel!`],
+/// recorder), once with [`Sse`], and with [`Avx`] and
+/// [`Avx16`] for [`project_range`]'s AVX2 copy. Made by [`kernel!`],
 /// which writes the closure once.
 pub(crate) struct Kernel<S, A, W> {
     sse: S,
@@ -230,8 +252,8 @@ impl<L: Lane, T: Copy, M: Copy, R, P> Project<L, T, M, R> for P where
 }
 
 impl<S, A, W> Kernel<S, A, W> {
-    /// The kernel `sse` in [`lanes::Sse`], `avx` in [`lanes::Avx`] and
-    /// `avx16` in [`lanes::Avx16`].
+    /// The kernel `sse` in [`Sse`], `avx` in [`Avx`] and
+    /// `avx16` in [`Avx16`].
     pub(crate) fn new<T: Copy, M: Copy, R>(sse: S, avx: A, avx16: W) -> Self
     where
         S: Fn(&Array<Sse, T>, &mut Array<Sse, M>, usize, &mut R),
@@ -258,19 +280,19 @@ macro_rules! kernel {
             #[inline(always)]
             |$c, $m, $n, $r| {
                 #[allow(dead_code)]
-                type F = $crate::solver::kernels::lanes::Sse;
+                type F = $crate::solver::kernels::Sse;
                 $body
             },
             #[inline(always)]
             |$c, $m, $n, $r| {
                 #[allow(dead_code)]
-                type F = $crate::solver::kernels::lanes::Avx;
+                type F = $crate::solver::kernels::Avx;
                 $body
             },
             #[inline(always)]
             |$c, $m, $n, $r| {
                 #[allow(dead_code)]
-                type F = $crate::solver::kernels::lanes::Avx16;
+                type F = $crate::solver::kernels::Avx16;
                 $body
             },
         )
@@ -372,8 +394,8 @@ const MAX_BLOCK: usize = 512;
 /// Projects `items[range]` chunk by chunk ([`project_batches`]), in AVX
 /// registers where the processor has AVX2 ([`avx2`]): the chunk loop, with
 /// the kernel inlined into it, is compiled twice, once for any processor
-/// with [`lanes::Sse`] and once for AVX2 with [`lanes::Avx`], and, for a
-/// [`Width::Wide`] range, [`lanes::Avx16`] first.
+/// with [`Sse`] and once for AVX2 with [`Avx`], and, for a
+/// [`Width::Wide`] range, [`Avx16`] first.
 #[inline(always)]
 fn project_range<T, M, R, S, A, W>(
     items: &[T],

@@ -3,7 +3,8 @@
 //! lanes of the kernels' portable copy. Each operation is `wide`'s own;
 //! [`avx`](super::avx) gives the same bits in one AVX register.
 
-use super::lanes::{LANES, Lane, Sse, chunks_of, each};
+use super::Sse;
+use super::lanes::{LANES, Lane, chunks_of, each};
 
 /// Trait methods that are `wide`'s methods of the same name and signature.
 macro_rules! wide_s {

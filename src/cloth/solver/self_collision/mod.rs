@@ -1,340 +1,366 @@
-//! Self-collision: the cloth's two sides stay apart at its thickness.
+//! Self-collision: the cloth's two sides stay apart at its thickness, and no
+//! edge passes through a triangle of its own cloth. docs/method.md §11b has
+//! the argument; this is the part as the solver runs it, in one type,
+//! `SelfCollision`, which owns all of its state.
 //!
-//! A **contact** is a particle `p` and a triangle `(a, b, c)` of the grid
-//! that `p` is not a corner of. (A triangle beside `p` in a flat or gently
-//! bent cloth has `p`'s foot outside it; only a crease sharper than a right
-//! angle within one cell brings a neighbour's triangle over `p`, and then the
-//! contact is what keeps the crease from passing through itself.) Let
-//! `y = β_a x_a + β_b x_b + β_c x_c` be the foot of `p` on the triangle's plane (barycentric `β`), and `n̄` the elements' own normals
-//! interpolated there, `n̄ ∝ β_a n_a + β_b n_b + β_c n_c`. The constraint is
-//! planarity's `(x_b − x_a) · n_a = 0`, made one-sided and offset by the
-//! thickness `h`:
+//! **The guarantee.** A cloth free of crossings at a substep's start (no
+//! grid edge through a triangle it shares no particle with) is free of them
+//! at its end. **Contacts** (`contact.rs`: a particle kept on its side of a
+//! triangle at the thickness, projected with the other families in every
+//! sweep) keep the layers apart but cannot promise it alone; the **path
+//! check** does (`path/`): no pair of primitives sharing no particle may
+//! close more than most of its distance along the substep's straight path,
+//! so none reaches distance 0 on the way. A pair that would is parted, and
+//! where that does not do, every particle is held within a fraction of its
+//! distance to the nearest such primitive (the offset bounds).
 //!
-//! ```text
-//! C = s (x_p − y) · n̄ − h ≥ 0,   gradients  s n̄  (p),  −β_k s n̄  (k = a, b, c)
-//! ```
+//! **The exceptions**, each where the code lets the cloth go unchecked
+//! (the next step's start then looks for crossings, and any it finds are
+//! tangles, left out until they come apart):
+//! - *a driven or pulled particle beyond its bound*: it goes where its body
+//!   or its pull takes it (`PathCheck::clamp`);
+//! - *a layer squeezed by a collider*: the colliders have the last word
+//!   (`SelfCollision::end_substep`);
+//! - *the steps after a jerk*: a body that teleports its particles drags
+//!   the cloth through itself; for `JERK_UNBOUNDED` steps nothing is
+//!   bounded, and for `JERK_WATCH` steps, and then as long as any is
+//!   found, tangles are left out (`SelfCollision::start_step`);
+//! - *tangled particles*: left out of the contacts, the path check and the
+//!   bounds, and moved so that the tangle shrinks (`untangle.rs`).
 //!
-//! active while the foot lies in the triangle. The side `s = ±1` is the one
-//! `p` was on at the **start** of the substep, before the update moved it: a
-//! particle that the update carried through the other layer is pushed back
-//! to where it came from, not on through. The interpolated element normal is
-//! smooth across triangle edges (the flat triangles' normals jump), so a
-//! particle sliding over the other layer is pushed in a direction that does
-//! not flip from one triangle to the next; where the elements disagree with
-//! the triangle (a crumpled cell) the triangle's own normal is used.
-//! Positions only: no element is turned.
+//! **The stages**, in the order a step runs them (the solver calls them
+//! from `step.rs` while the family's weight is above 0):
 //!
-//! Contacts are picked once per substep (`SelfContacts::build`) over the
-//! predicted positions, from the near particle–triangle pairs that the
-//! broad phase keeps while the cloth has not moved apart by more than a
-//! skin (`broad_phase::NearTriangles`), and kept for all the substep's
-//! sweeps; they are coloured like every other constraint set, so the
-//! threads share them bit-identically. After a jerk, for a second and then
-//! until none is found, particles of edges that cross a triangle
-//! (`SelfContacts::find_tangles`) are left out and moved so that the curves
-//! along which the cloth passes through itself shrink (`untangle.rs`): a
-//! cloth dragged through itself comes apart instead of being held tangled.
-//! Friction between layers is the colliders' Coulomb model
-//! (`apply_friction`).
+//! | when | stage | what it does |
+//! |---|---|---|
+//! | step's start | `start_step` | watches for jerks, and for crossings unless the cloth is known free of them |
+//! | substep's start | `start_substep` | moves tangled particles apart; starts the path check (near pairs, close edge pairs) |
+//! | after the update | `after_update` | the path from the start checked; else bounded |
+//! | before the sweeps | `find_contacts` | the substep's particle–triangle contacts, coloured |
+//! | the sweeps | `families::self_collision` | the contacts projected, friction between layers |
+//! | substep's end | `end_substep` | close edges pushed apart, the path checked again (bounded in rounds), the colliders' push checked |
+//! | step's end | `tangles` | the crossings now (the diagnostics' count), which are the tangles |
 //!
-//! The violation reported is the penetration `h − |(x_p − y) · n|` of the
-//! pairs closer than `h` ([`for_each_close`]), and separately the number of
-//! grid edges that cross a triangle they share no vertex with
-//! ([`crossings`]), which a crossing-free cloth keeps at zero.
-//!
-//! Contacts keep layers apart but cannot by themselves promise that no
-//! crossing forms (a particle can pass a layer it had no contact with; two
-//! edges can pass through each other with no particle over a face). The
-//! **path check** does (`offset/`): from a crossing-free start, no pair of
-//! primitives sharing no particle may close more than most of its distance
-//! in a substep, so none reaches distance 0 on the way; a pair that would
-//! is parted, and where that does not do, every particle's move is held to
-//! a fraction of its distance to the nearest such primitive (the offset
-//! bounds).
-//!
-//! Here: the contact, its projection and friction; the family that
-//! projects the contacts is [`families::self_collision`](super::families::self_collision).
-//! `broad_phase.rs`: the contacts' near pairs, and the spatial hash the
-//! crossing count uses. `prune.rs`: boxes sorted along an axis, to find
-//! which overlap (the near pairs' searches).
-//! `pick.rs`: the contact search of a substep (`SelfContacts`).
-//! `tangles.rs`: the measures (penetration depths, crossings) and the
-//! tangles a jerk leaves; `untangle.rs`: their pull apart. `offset/`: the
-//! path check and the offset bounds (`Offsets`).
+//! Files: `contact.rs` the contact and friction; `pick.rs` the contact
+//! search (`SelfContacts`); `broad_phase.rs` the contacts' near pairs and
+//! the crossing count's spatial hash; `prune.rs` boxes sorted along an
+//! axis; `path/` the path check and the bounds (`PathCheck`); `tangles.rs`
+//! the measures (penetration depths, crossings) and the tangles;
+//! `untangle.rs` their pull apart. Every stage's result depends on the
+//! positions alone, never on the threads.
 
 pub(crate) mod broad_phase;
-mod offset;
+mod contact;
+mod path;
 mod pick;
 mod prune;
-mod step;
 mod tangles;
 mod untangle;
 
+use std::time::{Duration, Instant};
+
 use glam::Vec3;
 
-use crate::solver::cloth::normal_of;
-use crate::solver::kernels::{Particles, delta_mu, shift};
-use crate::solver::topology::Touches;
+use crate::solver::cloth::ClothSpec;
+use crate::solver::topology::Topology;
+use contact::{Foot, Triangle, bounds, least};
+use path::{EDGE_GAP, PathCheck};
+use pick::{Layers, SelfContacts};
+use untangle::{STEP, untangle};
 
-pub(crate) use offset::{EDGE_GAP, Offsets};
-pub(crate) use pick::{Layers, SelfContacts};
+pub use contact::SelfContact;
+pub(crate) use contact::{apply_friction, project};
 pub use tangles::{ON_PLANE, crossing_points, crossings, for_each_close};
 
-/// One particle against one triangle, with the side it keeps.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SelfContact {
-    /// The particle.
-    pub particle: u32,
-    /// The triangle's particles.
-    pub triangle: [u32; 3],
-    /// `+1` or `−1`: the side of the triangle the particle was on at the
-    /// substep's start (along its normal `(x_b − x_a) × (x_c − x_a)`).
-    pub side: f32,
-    /// Which of the triangle's edges lie on the cloth's border: bit `k` for
-    /// the edge opposite corner `k` (used by `least`).
-    pub rim: u8,
+/// What the stages read of the cloth that a step does not change.
+#[derive(Clone, Copy)]
+pub(crate) struct Grid<'a> {
+    /// The grid's triangles and constraint sets.
+    pub topology: &'a Topology,
+    /// The cloth: its thickness and spacing.
+    pub spec: &'a ClothSpec,
+    /// Per particle: 0 for a driven one.
+    pub inv_mass: &'a [f32],
 }
 
-impl Touches for SelfContact {
-    fn particles(&self) -> impl Iterator<Item = u32> {
-        [
-            self.particle,
-            self.triangle[0],
-            self.triangle[1],
-            self.triangle[2],
-        ]
-        .into_iter()
+impl Grid<'_> {
+    fn triangles(&self) -> &[[u32; 3]] {
+        &self.topology.triangles
+    }
+
+    /// The shorter rest spacing.
+    fn spacing(&self) -> f32 {
+        let (dx, dy) = self.spec.spacing();
+        dx.min(dy)
     }
 }
 
-/// How far a barycentric coordinate may fall below 0 with the foot still in
-/// the triangle: neighbouring triangles overlap by a sliver, so a particle
-/// crossing the edge between two is always under one.
-const INSIDE: f32 = 0.01;
-/// The same beyond an edge on the cloth's border: half a cell, a hem
-/// around the cloth, so that a layer lying along another's border does
-/// not slip round it edge first (no face is under either edge there).
-const INSIDE_RIM: f32 = 0.5;
-
-/// A triangle, with what every foot on it needs.
-#[derive(Clone, Copy, Debug)]
-struct Triangle {
-    corner: Vec3,
-    e1: Vec3,
-    e2: Vec3,
-    /// The unit normal, `(x_b − x_a) × (x_c − x_a)` normalised.
-    normal: Vec3,
-    /// `1 / |(x_b − x_a) × (x_c − x_a)|`, one over twice the area.
-    inv_area2: f32,
+/// Self-collision: all of its state, and its stages (the module's table).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SelfCollision {
+    /// This substep's contacts, and the tangles left alone.
+    contacts: SelfContacts,
+    /// The path check and its bounds.
+    path: PathCheck,
+    /// Substeps left that a jerk leaves unbounded.
+    unbounded: u32,
+    /// Scratch of the substep's end: where the sweeps took the particles,
+    /// or the state the path was cleared to.
+    target: Vec<Vec3>,
+    /// Time spent in the stages since [`SelfCollision::take_time`], when
+    /// timed.
+    time: Option<Duration>,
 }
 
-impl Triangle {
-    /// The triangle with corners `t`; `None` if it is degenerate.
-    #[inline(always)]
-    fn new(t: [Vec3; 3]) -> Option<Self> {
-        let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
-        let cross = e1.cross(e2);
-        let area2 = cross.length();
-        if area2 <= 1e-12 {
-            return None;
+impl SelfCollision {
+    /// The contacts the sweeps project.
+    pub(crate) fn contacts(&self) -> &crate::solver::topology::Batched<SelfContact> {
+        &self.contacts.set
+    }
+
+    /// Off (the family's weight is 0): no contacts, and nothing known about
+    /// crossings.
+    pub(crate) fn off(&mut self) {
+        self.contacts.clear();
+        self.path.clear();
+    }
+
+    /// Times the stages from now on (`true`), or not.
+    pub(crate) fn time_stages(&mut self, on: bool) {
+        self.time = on.then_some(Duration::ZERO);
+    }
+
+    /// The time spent in the stages since the last call.
+    pub(crate) fn take_time(&mut self) -> Duration {
+        self.time.as_mut().map(std::mem::take).unwrap_or_default()
+    }
+
+    /// Runs `f` on `self`, timed if the stages are.
+    fn timed<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+        let start = self.time.is_some().then(Instant::now);
+        let out = f(self);
+        if let (Some(time), Some(start)) = (self.time.as_mut(), start) {
+            *time += start.elapsed();
         }
-        let inv_area2 = area2.recip();
-        Some(Self {
-            corner: t[0],
-            e1,
-            e2,
-            normal: cross * inv_area2,
-            inv_area2,
-        })
+        out
     }
 
-    /// Signed distance of `p` from the plane, along the normal.
-    #[inline(always)]
-    fn distance(&self, p: Vec3) -> f32 {
-        (p - self.corner).dot(self.normal)
-    }
-
-    /// The foot of `p`.
-    #[inline(always)]
-    fn foot(&self, p: Vec3) -> Foot {
-        let v = p - self.corner;
-        // Cross products with the normal drop v's normal part: the foot's
-        // coordinates.
-        let bb = v.cross(self.e2).dot(self.normal) * self.inv_area2;
-        let bc = self.e1.cross(v).dot(self.normal) * self.inv_area2;
-        Foot {
-            bary: [1.0 - bb - bc, bb, bc],
-            point: self.corner + self.e1 * bb + self.e2 * bc,
-            normal: self.normal,
-            distance: v.dot(self.normal),
+    /// **Step's start.** A jerk (an attachment's motion over this step
+    /// differs from the last step's by more than [`JERK`] rest spacings,
+    /// `motion_changes` being each attachment's difference: a teleport, not
+    /// a car that brakes, whose motion changes by millimetres a step) leaves
+    /// tangles alone for this step and the next [`JERK_WATCH`], and the
+    /// particles unbounded for [`JERK_UNBOUNDED`]: the cloth it drags
+    /// through itself comes apart instead of being held tangled. Otherwise
+    /// crossings are looked for unless the cloth is known free of them, and
+    /// any found are tangles, left alone until they come apart.
+    pub(crate) fn start_step(
+        &mut self,
+        grid: Grid,
+        x: &[Vec3],
+        motion_changes: impl IntoIterator<Item = f64>,
+        substeps: u32,
+    ) {
+        let limit = JERK as f64 * grid.spacing() as f64;
+        if motion_changes.into_iter().any(|d| !d.le(&limit)) {
+            self.contacts.watch_for_tangles((JERK_WATCH + 1) * substeps);
+            self.unbounded = JERK_UNBOUNDED * substeps;
         }
-    }
-}
-
-/// The lowest barycentric coordinate at corner `k` of a foot within the
-/// triangle: below 0 by [`INSIDE`], or [`INSIDE_RIM`] if the edge opposite
-/// `k` is on the border (`rim`), and by `more`.
-#[inline(always)]
-fn least(rim: u8, k: usize, more: f32) -> f32 {
-    let slack = if rim & (1 << k) != 0 {
-        INSIDE_RIM
-    } else {
-        INSIDE
-    };
-    -(slack + more)
-}
-
-/// A point's foot on a triangle's plane.
-#[derive(Clone, Copy, Debug)]
-struct Foot {
-    /// Barycentric coordinates of the foot.
-    bary: [f32; 3],
-    /// The foot.
-    point: Vec3,
-    /// The triangle's unit normal, `(x_b − x_a) × (x_c − x_a)` normalised.
-    normal: Vec3,
-    /// Signed distance of the point from the plane, along `normal`.
-    distance: f32,
-}
-
-impl Foot {
-    /// The foot of `p` on triangle `t`; `None` for a degenerate triangle.
-    #[inline(always)]
-    fn of(p: Vec3, t: [Vec3; 3]) -> Option<Self> {
-        Triangle::new(t).map(|t| t.foot(p))
-    }
-
-    /// Whether the foot is on the triangle, its border edges (`rim`) grown
-    /// by a hem, and every edge by `more`.
-    #[inline(always)]
-    fn within(&self, rim: u8, more: f32) -> bool {
-        (0..3).all(|k| self.bary[k] >= least(rim, k, more))
-    }
-
-    /// Whether the foot is on the triangle, its border edges (`rim`) grown
-    /// by a hem.
-    #[inline(always)]
-    fn inside(&self, rim: u8) -> bool {
-        self.within(rim, 0.0)
-    }
-
-    /// The elements' normals `n` interpolated at the foot, or the
-    /// triangle's where they disagree with it by more than 60°.
-    #[inline(always)]
-    fn smooth_normal(&self, n: [Vec3; 3]) -> Vec3 {
-        let [ba, bb, bc] = self.bary;
-        let m = n[0] * ba + n[1] * bb + n[2] * bc;
-        let len = m.length();
-        if len > 1e-6 && m.dot(self.normal) > 0.5 * len {
-            m * len.recip()
-        } else {
-            self.normal
+        if self.contacts.watching() {
+            // Tangled particles move freely: look again once they are apart.
+            self.path.checked = false;
+            return;
+        }
+        if self.path.checked {
+            return;
+        }
+        let tangled = !self.tangles(grid, x).is_empty();
+        self.path.checked = !tangled;
+        if tangled {
+            self.contacts.watch_for_tangles(substeps);
         }
     }
+
+    /// **Substep's start**, at `x`: the tangles left alone are moved apart
+    /// (`untangle.rs`), then the path check starts (`PathCheck::begin`),
+    /// unless a jerk leaves this substep unbounded.
+    pub(crate) fn start_substep(&mut self, grid: Grid, x: &mut [Vec3]) {
+        if self.contacts.leave_tangles_this_substep() {
+            self.tangles(grid, x);
+            self.timed(|s| {
+                let step = STEP * grid.spacing();
+                untangle(
+                    x,
+                    grid.inv_mass,
+                    grid.triangles(),
+                    &s.contacts.crossed,
+                    step,
+                );
+            });
+        }
+        if self.unbounded > 0 {
+            self.unbounded -= 1;
+            self.path.clear();
+            return;
+        }
+        self.timed(|s| {
+            s.path
+                .begin(x, grid.triangles(), grid.spec, s.contacts.tangled())
+        });
+    }
+
+    /// **After the update**: the particles stay where the update took them
+    /// if the path there forms no crossing; else they are bounded
+    /// ([`SelfCollision::clamp_to_bounds`], one round). `pulled` is the
+    /// particle a pull holds, if any.
+    pub(crate) fn after_update(&mut self, grid: Grid, x: &mut [Vec3], pulled: Option<usize>) {
+        self.timed(|s| s.clamp_to_bounds(grid, x, pulled, 1));
+    }
+
+    /// **Before the sweeps**: this substep's contacts over the predicted
+    /// positions `x` (`start` the substep's), within the thickness and
+    /// [`SELF_CONTACT_SLACK`] rest spacings.
+    pub(crate) fn find_contacts(&mut self, grid: Grid, x: &[Vec3], start: &[Vec3], threads: usize) {
+        self.timed(|s| {
+            let layers = Layers {
+                now: x,
+                start,
+                inv_mass: grid.inv_mass,
+            };
+            let reach = grid.spec.thickness + SELF_CONTACT_SLACK * grid.spacing();
+            s.contacts
+                .build(&layers, grid.topology, grid.spec, reach, threads);
+        });
+    }
+
+    /// **Substep's end**, after the sweeps: the edge pairs found nearer
+    /// than a fraction of the thickness at the substep's start are pushed
+    /// apart; the path from the start is checked again, bounded in up to
+    /// [`CLAMP_ROUNDS`] rounds ([`SelfCollision::clamp_to_bounds`]); then
+    /// the colliders have the last word (`push` projects them, and says
+    /// whether it moved a particle). Their push is a move the path check has
+    /// not seen, so the path is checked again for the pairs of the particles
+    /// it moved (`PathCheck::path_clear_after`), and while that parts
+    /// particles the colliders push again, up to [`COLLIDER_ROUNDS`] times.
+    /// A path still not clear after them (a layer squeezed between a
+    /// collider and another layer) leaves the cloth unchecked.
+    pub(crate) fn end_substep(
+        &mut self,
+        grid: Grid,
+        x: &mut [Vec3],
+        pulled: Option<usize>,
+        mut push: impl FnMut(&mut [Vec3]) -> bool,
+    ) {
+        self.timed(|s| {
+            let gap = EDGE_GAP * grid.spec.thickness;
+            s.path
+                .keep_edges_apart(x, grid.inv_mass, gap, s.contacts.tangled());
+            s.clamp_to_bounds(grid, x, pulled, CLAMP_ROUNDS);
+        });
+        let mut cleared = std::mem::take(&mut self.target);
+        cleared.clear();
+        cleared.extend_from_slice(x);
+        if push(x) && !self.check_colliders_push(grid, x, &cleared, &mut push) {
+            self.path.checked = false;
+        }
+        self.target = cleared;
+    }
+
+    /// **Step's end** (and wherever tangles are needed): which particles
+    /// are tangled at `x`, and where each (edge, triangle) pair crosses.
+    pub(crate) fn tangles(&mut self, grid: Grid, x: &[Vec3]) -> Vec<Vec3> {
+        self.timed(|s| s.contacts.find_tangles(x, grid.triangles(), grid.spec))
+    }
+
+    /// Leaves the particles at `x` if the path there from the substep's
+    /// start forms no crossing, parting the pairs that approach too fast
+    /// (`PathCheck::path_clear`); else bounds every particle at the start and
+    /// brings each within its bound. Where that moved a particle, the
+    /// bounds are found again at the clamped state (free of crossings like
+    /// the start) and the particles go on from there towards `x`, up to
+    /// `rounds` times: a particle held back by a near layer catches up with
+    /// the rest instead of stretching its edges. A pulled particle is parted
+    /// by its mass like any other, but left where its pull took it.
+    fn clamp_to_bounds(&mut self, grid: Grid, x: &mut [Vec3], pulled: Option<usize>, rounds: u32) {
+        let (triangles, exempt) = (grid.triangles(), self.contacts.tangled());
+        if self
+            .path
+            .path_clear(x, grid.inv_mass, triangles, grid.spec, exempt)
+        {
+            return;
+        }
+        self.path.find_at_start(triangles, grid.spec, exempt);
+        if rounds > 1 {
+            self.target.clear();
+            self.target.extend_from_slice(x);
+        }
+        for round in 1..=rounds {
+            let moved = self.path.clamp(x, grid.inv_mass, pulled);
+            if moved == 0 || round == rounds {
+                break;
+            }
+            let exempt = self.contacts.tangled();
+            self.path.find(x, triangles, grid.spec, exempt);
+            x.copy_from_slice(&self.target);
+        }
+    }
+
+    /// [`SelfCollision::end_substep`]'s rounds after the colliders pushed a
+    /// particle away from `cleared`: whether the path ends clear.
+    fn check_colliders_push(
+        &mut self,
+        grid: Grid,
+        x: &mut [Vec3],
+        cleared: &[Vec3],
+        push: &mut impl FnMut(&mut [Vec3]) -> bool,
+    ) -> bool {
+        for _ in 0..COLLIDER_ROUNDS {
+            let clear = self.timed(|s| {
+                let exempt = s.contacts.tangled();
+                s.path.path_clear_after(
+                    x,
+                    cleared,
+                    grid.inv_mass,
+                    grid.triangles(),
+                    grid.spec,
+                    exempt,
+                )
+            });
+            // Nothing parted: the colliders' push is where it was left.
+            if clear && !self.path.parted {
+                return true;
+            }
+            if !push(x) {
+                return clear;
+            }
+        }
+        false
+    }
 }
 
-/// Projects one contact, keeping the layers `thickness` apart, with
-/// compliance `alpha_t` (`α / Δt²`).
-#[inline]
-pub(crate) fn project(p: &Particles, c: SelfContact, mu: &mut f32, thickness: f32, alpha_t: f32) {
-    let i = c.particle as usize;
-    let t = c.triangle.map(|k| k as usize);
-    let Some(foot) = Foot::of(p.x(i), t.map(|k| p.x(k))) else {
-        return;
-    };
-    if !foot.inside(c.rim) {
-        return;
-    }
-    let n = foot.smooth_normal(t.map(|k| normal_of(p.q(k))));
-    let violation = c.side * (p.x(i) - foot.point).dot(n) - thickness;
-    if violation >= 0.0 {
-        return;
-    }
-    let wp = p.inv_mass[i];
-    let wt = t.map(|k| p.inv_mass[k]);
-    let b = foot.bary;
-    let w = generalised_inverse_mass(wp, wt, b);
-    if w == 0.0 {
-        return;
-    }
-    // One-sided: the multiplier only ever pushes the layers apart.
-    let d = delta_mu(violation, w, alpha_t, *mu).max(-*mu);
-    *mu += d;
-    let dir = n * (c.side * d);
-    if wp > 0.0 {
-        shift(p, i, dir * wp);
-    }
-    for k in 0..3 {
-        if wt[k] > 0.0 {
-            shift(p, t[k], dir * (-b[k] * wt[k]));
-        }
-    }
-}
+/// How much farther than the thickness, in rest spacings, a particle and a
+/// triangle may be at the predicted positions to be a self-contact of the
+/// substep: room for the adjust phase's own corrections to bring them
+/// together.
+const SELF_CONTACT_SLACK: f32 = 0.25;
 
-/// `w_p + Σ β_k² w_k`: how far a contact's separation moves per unit of its
-/// multiplier, for the particle's inverse mass `wp`, the corners' `wt` and
-/// the foot's barycentric `b`.
-#[inline(always)]
-fn generalised_inverse_mass(wp: f32, wt: [f32; 3], b: [f32; 3]) -> f32 {
-    wp + b[0] * b[0] * wt[0] + b[1] * b[1] * wt[1] + b[2] * b[2] * wt[2]
-}
+/// How much, in rest spacings, an attachment's motion may change from one
+/// step to the next before self-collision leaves tangles alone
+/// ([`SelfCollision::start_step`]).
+const JERK: f32 = 2.0;
 
-/// The box around a triangle's corners, grown by `margin`.
-#[inline]
-fn bounds(t: [Vec3; 3], margin: f32) -> (Vec3, Vec3) {
-    (
-        t[0].min(t[1]).min(t[2]) - Vec3::splat(margin),
-        t[0].max(t[1]).max(t[2]) + Vec3::splat(margin),
-    )
-}
+/// How many times a substep's end may be clamped to the bounds, finding
+/// them again in between ([`SelfCollision::end_substep`]).
+const CLAMP_ROUNDS: u32 = 6;
 
-/// Friction between layers: the colliders' Coulomb model. Each contact that
-/// pushed in the substep (multiplier `mu > 0`) removes the tangential motion
-/// of its particle relative to the triangle's point under it, up to
-/// `friction` times the distance it pushed them apart, shared in proportion
-/// to inverse mass. One thread, in contact order.
-pub(crate) fn apply_friction(
-    x: &mut [Vec3],
-    start: &[Vec3],
-    inv_mass: &[f32],
-    contacts: &[SelfContact],
-    mu: &[f32],
-    friction: f32,
-) {
-    if friction <= 0.0 {
-        return;
-    }
-    for (c, &m) in contacts.iter().zip(mu) {
-        if m <= 0.0 {
-            continue;
-        }
-        let i = c.particle as usize;
-        let t = c.triangle.map(|k| k as usize);
-        let Some(foot) = Foot::of(x[i], t.map(|k| x[k])) else {
-            continue;
-        };
-        if !foot.inside(c.rim) {
-            continue;
-        }
-        let b = foot.bary;
-        let (wp, wt) = (inv_mass[i], t.map(|k| inv_mass[k]));
-        let w = generalised_inverse_mass(wp, wt, b);
-        if w == 0.0 {
-            continue;
-        }
-        let moved = |k: usize| x[k] - start[k];
-        let rel = moved(i) - (moved(t[0]) * b[0] + moved(t[1]) * b[1] + moved(t[2]) * b[2]);
-        let n = foot.normal;
-        let tangential = rel - n * rel.dot(n);
-        let len = tangential.length();
-        if len <= 1e-12 {
-            continue;
-        }
-        let limit = friction * m * w;
-        let slip = tangential * ((limit / len).min(1.0) / w);
-        x[i] -= slip * wp;
-        for k in 0..3 {
-            x[t[k]] += slip * (b[k] * wt[k]);
-        }
-    }
-}
+/// How many times a substep's end checks the path again after the
+/// colliders pushed a particle ([`SelfCollision::end_substep`]).
+const COLLIDER_ROUNDS: u32 = 3;
+
+/// How many steps after a jerk self-collision leaves tangles alone.
+const JERK_WATCH: u32 = 60;
+
+/// How many steps, the jerk's included, the path check and its bounds are
+/// lifted for: the free particles follow the jerked ones, and are checked
+/// again (but for the tangled ones) while the tangles are undone.
+const JERK_UNBOUNDED: u32 = 5;

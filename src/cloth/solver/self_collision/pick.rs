@@ -7,7 +7,8 @@ use glam::Vec3;
 use super::broad_phase::{self, NearTriangles};
 use super::{SelfContact, Triangle, bounds, least};
 use crate::solver::cloth::ClothSpec;
-use crate::solver::kernels::lanes::{LANES, Sse as F, each};
+use crate::solver::kernels::Sse as F;
+use crate::solver::kernels::lanes::{LANES, each};
 use crate::solver::team;
 use crate::solver::topology::{Batched, Topology};
 

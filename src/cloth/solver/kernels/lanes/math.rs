@@ -109,7 +109,7 @@ pub(crate) fn scale<F: Lane>(rot: &ForcedRotation, violation: F, full: F) -> F {
 /// violation far under `h`: for the tiny violations of a cloth at rest that
 /// is `10⁻³⁰` of it and less, so the change, the multiplier, the moves and
 /// the turns that follow would all be subnormal numbers (about a hundred
-/// cycles each on many x86 cores, see `cloth::FOURTH_ORDER`) for moves far
+/// cycles each on many x86 cores, see `rotation::FOURTH_ORDER`) for moves far
 /// under what an `f32` position can hold. Dropping them changes results
 /// only in those bits (`docs/method.md`, "No subnormal numbers where Eq. 3
 /// closes").
@@ -151,9 +151,10 @@ pub(crate) fn clamp_unit<F: Lane>(v: F) -> F {
 mod tests {
     use glam::{Quat, Vec3};
 
-    use super::super::vectors::turn_by;
-    use super::super::{LANES, Q4, Sse as F, V3, each, live};
+    use super::super::turn_by;
+    use super::super::{LANES, Q4, V3, each, live};
     use super::*;
+    use wide::f32x8 as F;
 
     #[test]
     fn forced_drops_negligible_changes_and_keeps_the_rest() {
@@ -224,12 +225,12 @@ mod tests {
         };
         let (t, ok) = turn_by(q4, r4);
         assert!(ok.all());
-        let want = crate::solver::cloth::turn_by(q, r);
+        let want = crate::solver::rotation::turn_by(q, r);
         assert_eq!(
             t.lane(2).to_array().map(f32::to_bits),
             want.to_array().map(f32::to_bits)
         );
-        let n = crate::solver::cloth::normal_of(q);
+        let n = crate::solver::rotation::normal_of(q);
         assert_eq!(
             q4.normal().lane(1).to_array().map(f32::to_bits),
             n.to_array().map(f32::to_bits)

@@ -50,6 +50,8 @@ use std::ops::{Add, BitAnd, BitOr, BitOrAssign, Div, Mul, Neg, Not, Sub};
 
 pub(crate) use chunk::{Chunk, Held};
 pub(crate) use math::{atan, atan2, clamp_unit, delta_mu, forced};
+#[cfg(test)]
+pub(crate) use vectors::turn_by;
 pub(crate) use vectors::{Q4, V3};
 
 /// Constraints projected side by side: a chunk of [`Sse`] or [`Avx`].
@@ -155,28 +157,6 @@ pub(crate) trait Lane:
     fn pow2(self, bias: i32) -> Self;
 }
 
-/// Eight lanes of `wide`: two SSE registers (one AVX register in a build
-/// that enables AVX for every crate); its [`Lane`] is in `kernels/sse.rs`.
-pub(crate) type Sse = wide::f32x8;
-
-/// Eight lanes in one AVX register, for the copy of the kernels compiled
-/// for AVX2.
-#[cfg(target_arch = "x86_64")]
-pub(crate) type Avx = super::avx::F8;
-
-/// Sixteen lanes in two AVX registers, for the long batches' chunks in the
-/// copy of the kernels compiled for AVX2.
-#[cfg(target_arch = "x86_64")]
-pub(crate) type Avx16 = super::avx::F16;
-
-/// Elsewhere the AVX2 copy is never chosen; its kernels use [`Sse`].
-#[cfg(not(target_arch = "x86_64"))]
-pub(crate) type Avx = Sse;
-
-/// See [`Avx`].
-#[cfg(not(target_arch = "x86_64"))]
-pub(crate) type Avx16 = Sse;
-
 /// [`Lane`]'s chunk items for a type of `$n` lanes, built by `$each`:
 /// `[T; $n]`, borrowed from a slice of exactly `$n` items.
 macro_rules! chunks_of {
@@ -254,11 +234,8 @@ pub(crate) fn store_pairs<F: Lane>(v: [F; 2], mu: &mut F::Array<[f32; 2]>) {
 
 #[cfg(test)]
 mod tests {
-    use super::Sse as F;
-    use super::math::{exp_neg, scale};
-    use super::vectors::turn_by;
     use super::*;
-    use crate::solver::forced_rotation::ForcedRotation;
+    use wide::f32x8 as F;
 
     #[test]
     fn live_sets_every_bit_of_the_first_lanes_only() {
@@ -268,101 +245,5 @@ mod tests {
                 assert_eq!(b, if k < n { u32::MAX } else { 0 }, "{n} live, lane {k}");
             }
         }
-    }
-
-    /// The lane functions' results' bits in lane type `L`, lane by lane.
-    #[cfg(target_arch = "x86_64")]
-    fn lane_bits<L: Lane>(t: &[f32], y: &[f32], x: &[f32]) -> Vec<[u32; 10]> {
-        let rot = ForcedRotation { phi: 0.7, h: 1e-4 };
-        let lanes = |v: &[f32]| L::new(*L::chunk(v));
-        let (t, y, x) = (lanes(t), lanes(y), lanes(x));
-        let q = Q4 {
-            x: y,
-            y: x,
-            z: t,
-            w: L::ONE,
-        };
-        let r = V3 {
-            x: t * L::splat(0.01),
-            y: y * L::splat(0.01),
-            z: x * L::splat(0.01),
-        };
-        let (turned, series) = turn_by(q, r);
-        let results = [
-            atan(t),
-            atan2(y, x),
-            scale(&rot, t.abs(), x.abs()),
-            exp_neg(t.abs()),
-            forced(
-                &rot,
-                t.abs(),
-                y * L::splat(1e-3),
-                x.abs(),
-                L::simd_gt(x, 0.0),
-            ),
-            clamp_unit(t),
-            turned.x,
-            turned.w,
-            series,
-            q.normal().z,
-        ];
-        (0..L::N)
-            .map(|k| results.map(|v| v.at(k).to_bits()))
-            .collect()
-    }
-
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn the_avx_lanes_give_the_bits_of_the_sse_lanes() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
-        for i in 0..2000 {
-            let t0 = (i as f32 - 1000.0) * 0.0037 + 1e-4;
-            let t: [f32; WIDE_LANES] =
-                std::array::from_fn(|k| t0 * [1.0, -1.0, 0.01, 40.0][k % 4] + k as f32 * 1e-3);
-            let y: [f32; WIDE_LANES] =
-                std::array::from_fn(|k| [t0, t0, -t0, 0.3, f32::NAN, -0.0, 1e-30, t0][k % 8]);
-            let x: [f32; WIDE_LANES] = std::array::from_fn(|k| {
-                [1.0, -0.5, 0.0, t0, 2.0, -1.0, t0 * 3.0, -0.0][(k + k / 8) % 8]
-            });
-            // Sixteen lanes are eight and eight.
-            let (lo, hi) = (0..LANES, LANES..WIDE_LANES);
-            let mut sse = lane_bits::<Sse>(&t[lo.clone()], &y[lo.clone()], &x[lo.clone()]);
-            sse.extend(lane_bits::<Sse>(
-                &t[hi.clone()],
-                &y[hi.clone()],
-                &x[hi.clone()],
-            ));
-            let mut avx = lane_bits::<Avx>(&t[lo.clone()], &y[lo.clone()], &x[lo]);
-            avx.extend(lane_bits::<Avx>(&t[hi.clone()], &y[hi.clone()], &x[hi]));
-            assert_eq!(sse, avx, "{t0}");
-            assert_eq!(sse, lane_bits::<Avx16>(&t, &y, &x), "{t0}");
-        }
-    }
-
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn sixteen_lanes_mask_and_count_like_eight() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            return;
-        }
-        for n in 0..=WIDE_LANES {
-            let mask = live::<Avx16>(n);
-            assert_eq!(mask.to_bitmask(), (1u32 << n) - 1, "{n} live");
-            assert_eq!(mask.any(), n > 0);
-            assert_eq!(mask.none(), n == 0);
-            assert_eq!(mask.all(), n == WIDE_LANES);
-        }
-        let mut v = Avx16::splat(1.0);
-        v.set(11, -2.0);
-        assert_eq!(v.at(11), -2.0);
-        assert_eq!(
-            v.abs().to_array(),
-            [
-                1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0
-            ]
-        );
-        assert_eq!(v.simd_lt(0.0).to_bitmask(), 1 << 11);
     }
 }

@@ -5,7 +5,7 @@
 use glam::{Quat, Vec3};
 
 use super::Lane;
-use crate::solver::cloth::{FOURTH_ORDER, NEGLIGIBLE_TURN};
+use crate::solver::rotation::{FOURTH_ORDER, NEGLIGIBLE_TURN};
 
 /// A vector per lane.
 #[derive(Clone, Copy)]
@@ -158,7 +158,7 @@ impl<F: Lane> Q4<F> {
         Quat::from_xyzw(self.x.at(k), self.y.at(k), self.z.at(k), self.w.at(k))
     }
 
-    /// Each lane's normal (as [`normal_of`](crate::solver::cloth::normal_of)).
+    /// Each lane's normal (as [`normal_of`](crate::solver::rotation::normal_of)).
     #[inline(always)]
     pub(crate) fn normal(&self) -> V3<F> {
         let two = F::splat(2.0);
@@ -182,13 +182,13 @@ impl<F: Lane> Q4<F> {
     }
 }
 
-/// [`turn_by`](crate::solver::cloth::turn_by) by its half-angle series, in
+/// [`turn_by`](crate::solver::rotation::turn_by) by its half-angle series, in
 /// every lane; the mask says which lanes are within the series' range (the
 /// others need the scalar turn). The fourth-order terms only where they
 /// count ([`FOURTH_ORDER`]): elsewhere `θ⁴` would be subnormal for the tiny
 /// turns of a resting cloth.
 #[inline(always)]
-pub(super) fn turn_by<F: Lane>(q: Q4<F>, r: V3<F>) -> (Q4<F>, F) {
+pub(crate) fn turn_by<F: Lane>(q: Q4<F>, r: V3<F>) -> (Q4<F>, F) {
     // As the scalar `angle_squared`: components under NEGLIGIBLE_TURN left out.
     let kept = |v: F| v.abs().simd_lt(NEGLIGIBLE_TURN).select(F::ZERO, v);
     let t2 = V3 {

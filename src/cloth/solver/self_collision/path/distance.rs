@@ -277,6 +277,52 @@ fn segment_point_lanes(a: [Lanes; 3], b: [Lanes; 3], p: [Lanes; 3]) -> Lanes {
     (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt()
 }
 
+/// Calls `f(i, j, d)` with the distance `d` between edges `segments[i]`
+/// and `segments[j]` for every pair of `pairs`, in order, measured eight at
+/// a time (the last eight padded with its last pair, not reported).
+pub(super) fn for_each_edge_distance(
+    x: &[Vec3],
+    segments: &[[u32; 2]],
+    pairs: &[(u32, u32)],
+    mut f: impl FnMut(u32, u32, f32),
+) {
+    let mut lanes = [[Vec3::ZERO; 4]; 8];
+    for eight in pairs.chunks(8) {
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            let (i, j) = eight[k.min(eight.len() - 1)];
+            let (e, g) = (segments[i as usize], segments[j as usize]);
+            *lane = [e[0], e[1], g[0], g[1]].map(|q| x[q as usize]);
+        }
+        let d = segment_distances(&lanes);
+        for (&(i, j), &d) in eight.iter().zip(&d) {
+            f(i, j, d);
+        }
+    }
+}
+
+/// Calls `f(p, t, d)` with the distance `d` of particle `p` from triangle
+/// `t` for every pair of `pairs`, in order, measured eight at a time (the
+/// last eight padded as for edges).
+pub(super) fn for_each_face_distance(
+    x: &[Vec3],
+    triangles: &[[u32; 3]],
+    pairs: &[(u32, u32)],
+    mut f: impl FnMut(u32, u32, f32),
+) {
+    let mut lanes = [[Vec3::ZERO; 4]; 8];
+    for eight in pairs.chunks(8) {
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            let (p, t) = eight[k.min(eight.len() - 1)];
+            let [a, b, c] = triangles[t as usize];
+            *lane = [p, a, b, c].map(|q| x[q as usize]);
+        }
+        let d = point_triangle_distances(&lanes);
+        for (&(p, t), &d) in eight.iter().zip(&d) {
+            f(p, t, d);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@
 //! combination of its corners, so a pair at distance `D⁰` at `X⁰` stays at
 //! least `D⁰ − max |u_a − u_b|` apart (`u` the corners' moves), and that is
 //! at least `D⁰ − δ_A − δ_B` with `δ` each primitive's largest move beyond
-//! a common translation. [`Offsets::path_clear`] checks this for every pair
+//! a common translation. [`PathCheck::path_clear`] checks this for every pair
 //! of the near list (`pairs.rs`), exactly for the few the cheap test fails
 //! (the plane between their nearest points at the start or at the end
 //! parts them at both), and parts those that fail that along the start's,
@@ -21,7 +21,7 @@
 //! particle `i` gets a bound `b_i = γ d_i` (`γ < ½`, `d_i` its distance to
 //! the nearest primitive sharing no particle with it, capped at the radius
 //! `r`) at `X⁰` and is brought within it of where the common motion
-//! carried it ([`Offsets::clamp`]): a pair at distance `D` comes no nearer
+//! carried it ([`PathCheck::clamp`]): a pair at distance `D` comes no nearer
 //! than `D − 2γD > 0`, and the balls are convex, so the straight path
 //! keeps them. Driven particles follow their bodies and are neither parted
 //! nor clamped. A pulled particle is parted by its mass like any other but
@@ -58,20 +58,21 @@ pub(crate) const GAMMA: f32 = 0.4;
 pub(crate) const RADIUS: f32 = 0.5;
 
 /// How near, in thicknesses, two edges may come before they are pushed
-/// apart ([`Offsets::keep_edges_apart`]).
+/// apart ([`PathCheck::keep_edges_apart`]).
 pub(crate) const EDGE_GAP: f32 = 0.25;
 
 /// How many times the pairs that fail the path's test are parted
-/// before every particle is bounded instead ([`Offsets::path_clear`]).
+/// before every particle is bounded instead ([`PathCheck::path_clear`]).
 const PART_ROUNDS: u32 = 4;
 
 /// How much more a driven particle weighs than a free one with the same
-/// bound in the common motion ([`Offsets::common_motion`]).
+/// bound in the common motion ([`PathCheck::common_motion`]).
 const DRIVEN_WEIGHT: f64 = 1e4;
 
-/// Each particle's bound, and where it was found.
+/// The path check of a substep: the near pairs it tests, and, for the
+/// fallback, each particle's bound and where it was found.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Offsets {
+pub(crate) struct PathCheck {
     near: NearPairs,
     /// The substep's start; empty: nothing to check or clamp.
     from: Vec<Vec3>,
@@ -88,13 +89,13 @@ pub(crate) struct Offsets {
     /// free of them: false once a driven particle, which is not clamped,
     /// went beyond its bound.
     pub checked: bool,
-    /// Whether the last [`Offsets::path_clear`] parted a pair.
+    /// Whether the last [`PathCheck::path_clear`] parted a pair.
     pub parted: bool,
 }
 
-impl Offsets {
+impl PathCheck {
     /// Forgets the bounds and the substep's start: nothing is clamped
-    /// until the next [`Offsets::begin`].
+    /// until the next [`PathCheck::begin`].
     pub(crate) fn clear(&mut self) {
         self.from.clear();
         self.start.clear();
@@ -187,7 +188,7 @@ impl Offsets {
         false
     }
 
-    /// [`Offsets::path_clear`] for `x`, moved from `before`, to which the
+    /// [`PathCheck::path_clear`] for `x`, moved from `before`, to which the
     /// path from the substep's start was cleared (by the check or by the
     /// bounds): only the pairs with a particle that moved since are checked
     /// again, the others' corners being where they were.
@@ -307,7 +308,7 @@ impl Offsets {
     }
 }
 
-impl Offsets {
+impl PathCheck {
     /// The common translation the bounds are measured from: the mean
     /// displacement since the bounds were found, each particle weighted by
     /// `1 / b²`, so that the particles with the least room (near another
@@ -332,7 +333,7 @@ impl Offsets {
     }
 }
 
-impl Offsets {
+impl PathCheck {
     /// Pushes every edge pair found nearer than the thickness apart to it,
     /// along the direction between their nearest points when found (the
     /// side they were on), one pair after another; pairs with an exempt
