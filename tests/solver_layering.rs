@@ -17,6 +17,10 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+#[path = "source/mod.rs"]
+mod source;
+use source::{paths_in, rust_files};
+
 /// The root's own items (`Solver`, `StepError`, …) are this module.
 const ROOT: &str = "Solver";
 
@@ -104,18 +108,6 @@ fn modules() -> Vec<String> {
         .collect();
     out.sort();
     out
-}
-
-/// Every `.rs` file under the solver's folder.
-fn files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("a source directory") {
-        let path = entry.expect("an entry").path();
-        if path.is_dir() {
-            files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
 }
 
 /// A file's module path under the solver: `self_collision/path/mod.rs`
@@ -262,35 +254,11 @@ fn without_uses(code: &str) -> String {
 
 /// Every `a::b` path outside `use` items, with its line.
 fn code_paths(code: &str) -> Vec<(usize, String)> {
-    let mut out = Vec::new();
-    for (i, line) in without_uses(code).lines().enumerate() {
-        let bytes = line.as_bytes();
-        let ident = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'$';
-        let mut k = 0;
-        while k < bytes.len() {
-            if !ident(bytes[k]) || (k > 0 && (ident(bytes[k - 1]) || bytes[k - 1] == b':')) {
-                k += 1;
-                continue;
-            }
-            let start = k;
-            let mut end = k;
-            loop {
-                while end < bytes.len() && ident(bytes[end]) {
-                    end += 1;
-                }
-                if line[end..].starts_with("::") && end + 2 < bytes.len() && ident(bytes[end + 2]) {
-                    end += 2;
-                } else {
-                    break;
-                }
-            }
-            if line[start..end].contains("::") {
-                out.push((i + 1, line[start..end].to_string()));
-            }
-            k = end.max(k + 1);
-        }
-    }
-    out
+    let code = without_uses(code);
+    let lines = code.lines().enumerate();
+    lines
+        .flat_map(|(i, line)| paths_in(line).into_iter().map(move |p| (i + 1, p)))
+        .collect()
 }
 
 /// The solver module a path written in the module at `at` reaches, if it
@@ -325,7 +293,7 @@ fn target(path: &str, at: &[String], names: &BTreeMap<String, String>) -> Option
 fn report() -> (Vec<String>, BTreeMap<String, Vec<String>>) {
     let names = reexports();
     let mut all = Vec::new();
-    files(&solver_dir(), &mut all);
+    rust_files(&solver_dir(), &mut all);
     all.sort();
     let (mut bad, mut graph) = (Vec::new(), BTreeMap::<String, Vec<String>>::new());
     for file in all {
