@@ -74,7 +74,14 @@ const LAYERS: [(&str, &[&str]); 20] = [
     ),
     (
         "diagnostics",
-        &["families", "cloth", "topology", "kernels", "team"],
+        &[
+            "families",
+            "self_collision",
+            "cloth",
+            "topology",
+            "kernels",
+            "team",
+        ],
     ),
     ("adjust", ALL),
     ("measure", ALL),

@@ -142,7 +142,9 @@ impl Solver {
             let violations = self.violations_from(facing);
             let d = self.diagnostics.as_deref_mut().expect("diagnostics are on");
             d.orientation = diagnostics::orientation(&offsets);
-            d.families[Family::SelfCollision].time += self.self_collision.take_time();
+            let stages = self.self_collision.take_time();
+            d.families[Family::SelfCollision].time += stages.total();
+            d.self_collision = stages;
             d.self_crossings = crossings.as_ref().map(Vec::len);
             d.crossing_points = crossings.unwrap_or_default();
             for (fd, v) in d.families.iter_mut().zip(violations) {

@@ -28,6 +28,7 @@ use super::{
     families::{Family, PerFamily, Violation, facing},
     kernels::Recorder,
     kernels::lanes::{Lane, V3, WIDE_LANES},
+    self_collision::StageTimes,
     team,
     topology::{Pair, Patch, Topology},
 };
@@ -82,6 +83,9 @@ pub struct Diagnostics {
     pub crossing_points: Vec<Vec3>,
     /// Wall times.
     pub timings: Timings,
+    /// Where self-collision's time went, stage by stage (part of its
+    /// family's `time`).
+    pub self_collision: StageTimes,
 }
 
 impl Diagnostics {
@@ -110,6 +114,7 @@ impl Diagnostics {
             f.time = Duration::ZERO;
         }
         self.timings = Timings::default();
+        self.self_collision = StageTimes::default();
     }
 }
 

@@ -107,9 +107,47 @@ pub(crate) struct SelfCollision {
     /// Scratch of the substep's end: where the sweeps took the particles,
     /// or the state the path was cleared to.
     target: Vec<Vec3>,
-    /// Time spent in the stages since [`SelfCollision::take_time`], when
+    /// Time spent in each stage since [`SelfCollision::take_time`], when
     /// timed.
-    time: Option<Duration>,
+    time: Option<StageTimes>,
+}
+
+/// Wall time spent in each of self-collision's stages (the module's
+/// table), for the diagnostics: where its cost goes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    /// Watching for jerks and crossings at a step's start.
+    pub step_start: Duration,
+    /// Untangling and the path check's start, at each substep's start.
+    pub substep_start: Duration,
+    /// The path checked (or bounded) after the update.
+    pub after_update: Duration,
+    /// The substep's contacts found.
+    pub contacts: Duration,
+    /// Edges pushed apart and the path checked again at the substep's end
+    /// (the colliders' push not included).
+    pub substep_end: Duration,
+    /// The crossings (tangles) counted at a step's end.
+    pub tangles: Duration,
+}
+
+impl StageTimes {
+    /// Every stage with its lower-case name, in the order they run.
+    pub fn iter(&self) -> [(&'static str, Duration); 6] {
+        [
+            ("step_start", self.step_start),
+            ("substep_start", self.substep_start),
+            ("after_update", self.after_update),
+            ("contacts", self.contacts),
+            ("substep_end", self.substep_end),
+            ("tangles", self.tangles),
+        ]
+    }
+
+    /// The time of every stage together.
+    pub fn total(&self) -> Duration {
+        self.iter().into_iter().map(|(_, t)| t).sum()
+    }
 }
 
 impl SelfCollision {
@@ -127,20 +165,25 @@ impl SelfCollision {
 
     /// Times the stages from now on (`true`), or not.
     pub(crate) fn time_stages(&mut self, on: bool) {
-        self.time = on.then_some(Duration::ZERO);
+        self.time = on.then(StageTimes::default);
     }
 
-    /// The time spent in the stages since the last call.
-    pub(crate) fn take_time(&mut self) -> Duration {
+    /// The time spent in each stage since the last call.
+    pub(crate) fn take_time(&mut self) -> StageTimes {
         self.time.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
-    /// Runs `f` on `self`, timed if the stages are.
-    fn timed<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+    /// Runs `f` on `self`, its time added to `stage`'s if the stages are
+    /// timed.
+    fn timed<T>(
+        &mut self,
+        stage: fn(&mut StageTimes) -> &mut Duration,
+        f: impl FnOnce(&mut Self) -> T,
+    ) -> T {
         let start = self.time.is_some().then(Instant::now);
         let out = f(self);
         if let (Some(time), Some(start)) = (self.time.as_mut(), start) {
-            *time += start.elapsed();
+            *stage(time) += start.elapsed();
         }
         out
     }
@@ -174,7 +217,11 @@ impl SelfCollision {
         if self.path.checked {
             return;
         }
-        let tangled = !self.tangles(grid, x).is_empty();
+        let found = self.timed(
+            |t| &mut t.step_start,
+            |s| s.contacts.find_tangles(x, grid.triangles(), grid.spec),
+        );
+        let tangled = !found.is_empty();
         self.path.checked = !tangled;
         if tangled {
             self.contacts.watch_for_tangles(substeps);
@@ -185,9 +232,10 @@ impl SelfCollision {
     /// (`untangle.rs`), then the path check starts (`PathCheck::begin`),
     /// unless a jerk leaves this substep unbounded.
     pub(crate) fn start_substep(&mut self, grid: Grid, x: &mut [Vec3]) {
+        let start: fn(&mut StageTimes) -> &mut Duration = |t| &mut t.substep_start;
         if self.contacts.leave_tangles_this_substep() {
-            self.tangles(grid, x);
-            self.timed(|s| {
+            self.timed(start, |s| {
+                s.contacts.find_tangles(x, grid.triangles(), grid.spec);
                 let step = STEP * grid.spacing();
                 untangle(
                     x,
@@ -203,7 +251,7 @@ impl SelfCollision {
             self.path.clear();
             return;
         }
-        self.timed(|s| {
+        self.timed(start, |s| {
             s.path
                 .begin(x, grid.triangles(), grid.spec, s.contacts.tangled())
         });
@@ -214,23 +262,29 @@ impl SelfCollision {
     /// ([`SelfCollision::clamp_to_bounds`], one round). `pulled` is the
     /// particle a pull holds, if any.
     pub(crate) fn after_update(&mut self, grid: Grid, x: &mut [Vec3], pulled: Option<usize>) {
-        self.timed(|s| s.clamp_to_bounds(grid, x, pulled, 1));
+        self.timed(
+            |t| &mut t.after_update,
+            |s| s.clamp_to_bounds(grid, x, pulled, 1),
+        );
     }
 
     /// **Before the sweeps**: this substep's contacts over the predicted
     /// positions `x` (`start` the substep's), within the thickness and
     /// [`SELF_CONTACT_SLACK`] rest spacings.
     pub(crate) fn find_contacts(&mut self, grid: Grid, x: &[Vec3], start: &[Vec3], threads: usize) {
-        self.timed(|s| {
-            let layers = Layers {
-                now: x,
-                start,
-                inv_mass: grid.inv_mass,
-            };
-            let reach = grid.spec.thickness + SELF_CONTACT_SLACK * grid.spacing();
-            s.contacts
-                .build(&layers, grid.topology, grid.spec, reach, threads);
-        });
+        self.timed(
+            |t| &mut t.contacts,
+            |s| {
+                let layers = Layers {
+                    now: x,
+                    start,
+                    inv_mass: grid.inv_mass,
+                };
+                let reach = grid.spec.thickness + SELF_CONTACT_SLACK * grid.spacing();
+                s.contacts
+                    .build(&layers, grid.topology, grid.spec, reach, threads);
+            },
+        );
     }
 
     /// **Substep's end**, after the sweeps: the edge pairs found nearer
@@ -251,12 +305,15 @@ impl SelfCollision {
         pulled: Option<usize>,
         mut push: impl FnMut(&mut [Vec3]) -> bool,
     ) {
-        self.timed(|s| {
-            let gap = EDGE_GAP * grid.spec.thickness;
-            s.path
-                .keep_edges_apart(x, grid.inv_mass, gap, s.contacts.tangled());
-            s.clamp_to_bounds(grid, x, pulled, CLAMP_ROUNDS);
-        });
+        self.timed(
+            |t| &mut t.substep_end,
+            |s| {
+                let gap = EDGE_GAP * grid.spec.thickness;
+                s.path
+                    .keep_edges_apart(x, grid.inv_mass, gap, s.contacts.tangled());
+                s.clamp_to_bounds(grid, x, pulled, CLAMP_ROUNDS);
+            },
+        );
         let mut cleared = std::mem::take(&mut self.target);
         cleared.clear();
         cleared.extend_from_slice(x);
@@ -269,7 +326,10 @@ impl SelfCollision {
     /// **Step's end** (and wherever tangles are needed): which particles
     /// are tangled at `x`, and where each (edge, triangle) pair crosses.
     pub(crate) fn tangles(&mut self, grid: Grid, x: &[Vec3]) -> Vec<Vec3> {
-        self.timed(|s| s.contacts.find_tangles(x, grid.triangles(), grid.spec))
+        self.timed(
+            |t| &mut t.tangles,
+            |s| s.contacts.find_tangles(x, grid.triangles(), grid.spec),
+        )
     }
 
     /// Leaves the particles at `x` if the path there from the substep's
@@ -315,17 +375,20 @@ impl SelfCollision {
         push: &mut impl FnMut(&mut [Vec3]) -> bool,
     ) -> bool {
         for _ in 0..COLLIDER_ROUNDS {
-            let clear = self.timed(|s| {
-                let exempt = s.contacts.tangled();
-                s.path.path_clear_after(
-                    x,
-                    cleared,
-                    grid.inv_mass,
-                    grid.triangles(),
-                    grid.spec,
-                    exempt,
-                )
-            });
+            let clear = self.timed(
+                |t| &mut t.substep_end,
+                |s| {
+                    let exempt = s.contacts.tangled();
+                    s.path.path_clear_after(
+                        x,
+                        cleared,
+                        grid.inv_mass,
+                        grid.triangles(),
+                        grid.spec,
+                        exempt,
+                    )
+                },
+            );
             // Nothing parted: the colliders' push is where it was left.
             if clear && !self.path.parted {
                 return true;
