@@ -195,6 +195,29 @@ fn gui_set_is_validated_before_the_window_opens() {
     assert!(stderr.contains("did you mean `curvature`"), "{stderr}");
 }
 
+/// `weft gui --memory-limit` is checked before the window opens: a text
+/// that is no size, or a limit under 100MB, fails saying what is allowed.
+#[test]
+fn gui_memory_limit_is_validated_before_the_window_opens() {
+    for (limit, said) in [
+        ("3XB", "expected e.g. '16GB'"),
+        ("50MB", "under 100MB the viewer would drop every frame"),
+        ("120%", "percentage must be between 0 and 100"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+            .args(["gui", "--memory-limit", limit])
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{limit}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(&format!("--memory-limit {limit}: ")), "{stderr}");
+        assert!(stderr.contains(said), "{stderr}");
+        assert!(stderr.contains("allowed: 100MB or more"), "{stderr}");
+    }
+}
+
 /// A log backend is installed: `RUST_LOG` reaches Rerun's and wgpu's logs
 /// (here the SDK's debug message when it opens the file).
 #[test]

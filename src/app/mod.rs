@@ -190,6 +190,26 @@ impl WeftApp {
     }
 }
 
+/// The smallest memory limit the live viewer takes: below it, frames would
+/// be dropped as soon as they arrive.
+const LEAST_MEMORY_LIMIT: u64 = 100_000_000;
+
+/// `--memory-limit`'s text as the viewer's limit, or an error that says
+/// what is allowed.
+fn viewer_memory_limit(text: &str) -> anyhow::Result<re_memory::MemoryLimit> {
+    let allowed = "allowed: 100MB or more (`500MB`, `2GB`), a share of the machine's RAM \
+                   (`25%`), or `unlimited`";
+    let limit = re_memory::MemoryLimit::parse(text)
+        .map_err(|e| anyhow::anyhow!("--memory-limit {text}: {e}; {allowed}"))?;
+    if limit.as_bytes() < LEAST_MEMORY_LIMIT {
+        anyhow::bail!(
+            "--memory-limit {text}: under 100MB the viewer would drop every frame as it \
+             arrives; {allowed}"
+        );
+    }
+    Ok(limit)
+}
+
 /// The embedded viewer, set up in the window being created (with a warning
 /// for a graphics driver known to leak).
 fn viewer_app(
@@ -312,8 +332,10 @@ pub fn on_viewer_event(link: &std::sync::Mutex<panel::ViewerLink>, event: Viewer
 pub fn run(
     preset: &str,
     overrides: &[Override],
+    memory_limit: &str,
     screenshot: Option<Screenshot>,
 ) -> anyhow::Result<()> {
+    let memory_limit = viewer_memory_limit(memory_limit)?;
     let loaded = load::load(preset, overrides)?;
     for w in &loaded.warnings {
         eprintln!("warning: {w}");
@@ -346,6 +368,7 @@ pub fn run(
         options,
         Box::new(move |cc| {
             let mut viewer = viewer_app(main_thread_token, startup, cc)?;
+            viewer.app_options_mut().memory_limit = memory_limit;
             viewer.add_log_receiver(rx);
             viewer.extend_view_class(SpatialView3D::identifier(), |r| {
                 r.register_context_system::<pull::Probe>()

@@ -80,6 +80,10 @@ Nothing is run: a sweep or fit not finished gives a page of what is done, labell
     },
 }
 
+/// The live viewer's memory limit unless `--memory-limit` says otherwise:
+/// about ten minutes of `flag_on_car` played at level `full`.
+const VIEWER_MEMORY_LIMIT: &str = "1GB";
+
 /// Options of `weft gui`.
 #[derive(Debug, Args)]
 pub struct GuiArgs {
@@ -96,6 +100,12 @@ pub struct GuiArgs {
     /// Frames to play before the screenshot.
     #[arg(long, value_name = "N", default_value_t = 60, requires = "screenshot")]
     pub frames: u64,
+    /// The most memory the viewer's recordings may take (`1GB`, `500MB`, a
+    /// share of the machine's RAM such as `25%`, or `unlimited`); past it
+    /// the viewer drops the oldest frames, farthest from its time cursor,
+    /// first (docs/debugger.md, "Memory while playing").
+    #[arg(long, value_name = "LIMIT", default_value = VIEWER_MEMORY_LIMIT)]
+    pub memory_limit: String,
 }
 
 /// Options of `weft view`.
@@ -183,6 +193,7 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         preset: "flag_on_car".into(),
         set: Vec::new(),
         screenshot: None,
+        memory_limit: VIEWER_MEMORY_LIMIT.into(),
         frames: 60,
     }));
     match command {
@@ -293,7 +304,7 @@ fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
         path,
         frames: args.frames,
     });
-    crate::app::run(&args.preset, &args.set, screenshot)?;
+    crate::app::run(&args.preset, &args.set, &args.memory_limit, screenshot)?;
     Ok(ExitCode::SUCCESS)
 }
 
