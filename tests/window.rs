@@ -212,7 +212,10 @@ fn gui_memory_limit_is_validated_before_the_window_opens() {
             .unwrap();
         assert_eq!(out.status.code(), Some(2), "{limit}");
         let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(stderr.contains(&format!("--memory-limit {limit}: ")), "{stderr}");
+        assert!(
+            stderr.contains(&format!("--memory-limit {limit}: ")),
+            "{stderr}"
+        );
         assert!(stderr.contains(said), "{stderr}");
         assert!(stderr.contains("allowed: 100MB or more"), "{stderr}");
     }

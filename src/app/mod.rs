@@ -335,6 +335,7 @@ pub fn run(
     memory_limit: &str,
     screenshot: Option<Screenshot>,
 ) -> anyhow::Result<()> {
+    let memory_text = memory_limit.to_string();
     let memory_limit = viewer_memory_limit(memory_limit)?;
     let loaded = load::load(preset, overrides)?;
     for w in &loaded.warnings {
@@ -354,7 +355,8 @@ pub fn run(
         },
     )
     .map_err(anyhow::Error::msg)?;
-    let panel = Panel::new(&session.status());
+    let mut panel = Panel::new(&session.status());
+    panel.memory_limit = memory_text;
     let link = panel.link();
     let (options, scratch) = window_options(screenshot.is_some());
     let startup = re_viewer::StartupOptions {

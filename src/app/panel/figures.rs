@@ -39,6 +39,15 @@ impl Panel {
                         status.checkpoints.0, status.checkpoints.1
                     ),
                 );
+                if let Some(heap) = re_memory::accounting_allocator::global_allocs() {
+                    ui.label("memory").on_hover_text(
+                        "the heap (the viewer's recordings, the runs' checkpoints, the solver); \
+                         past the limit (--memory-limit) the viewer drops its oldest data",
+                    );
+                    let mb = |b: usize| b as f64 / 1e6;
+                    ui.monospace(format!("{:.0} MB of {}", mb(heap.size), self.memory_limit));
+                    ui.end_row();
+                }
             });
         ui.label(RichText::new(format!("run {}", status.run.name)).small())
             .on_hover_text(format!(

@@ -74,6 +74,9 @@ pub struct Panel {
     save_diff: bool,
     link: Arc<Mutex<ViewerLink>>,
     seen: (u64, u64, u64),
+    /// The viewer's memory limit, as `--memory-limit` gave it (shown
+    /// beside the heap's size).
+    pub memory_limit: String,
 }
 
 impl Panel {
@@ -110,6 +113,7 @@ impl Panel {
             save_diff: load::load(&status.preset_name, &[]).is_ok(),
             link: Arc::default(),
             seen: (0, 0, 0),
+            memory_limit: "unlimited".into(),
         };
         p.sync(&preset);
         p
