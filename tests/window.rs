@@ -41,7 +41,7 @@ fn the_window_shows_the_cloth_and_the_panel() {
         ])
         .arg("--screenshot")
         .arg(&shot)
-        .args(["--frames", "300"])
+        .args(["--frames", "300", "--burst", "4"])
         .env_remove("WAYLAND_DISPLAY")
         .current_dir(dir.path())
         .output()
@@ -63,6 +63,28 @@ fn the_window_shows_the_cloth_and_the_panel() {
         .and_then(|t| t.parse().ok())
         .unwrap_or_else(|| panic!("no lag reported:\n{stderr}"));
     assert!(behind <= 0.5, "the view was {behind} s behind:\n{stderr}");
+    // Each time the window drew while playing, the 3D view drew one frame:
+    // what the viewer held of the particles, the framing points and the
+    // mesh at its time cursor was logged at the same frame.
+    let (drew, mixed): (u64, u64) = stderr
+        .split("of the ")
+        .nth(1)
+        .and_then(|t| {
+            let drew = t.split(' ').next()?.parse().ok()?;
+            let mixed = t.split("mixed two frames ").nth(1)?.split(' ').next()?;
+            Some((drew, mixed.parse().ok()?))
+        })
+        .unwrap_or_else(|| panic!("no count of mixed frames:\n{stderr}"));
+    assert!(drew > 10, "the window drew {drew} times while playing");
+    assert_eq!(mixed, 0, "{stderr}");
+    // The pictures taken while playing show the cloth too.
+    for k in 1..=4 {
+        let burst = image::open(dir.path().join(format!("window-{k}.png")))
+            .unwrap()
+            .to_rgba8();
+        let cloth = share(&burst, (0.02, 0.45), (0.07, 0.77), sand);
+        assert!(cloth > 0.01, "no cloth in picture {k} ({cloth})");
+    }
     // Nothing for the viewer to pop up as a notification over the panel at
     // start: its layout arrives after the first frame (so the `sim_time`
     // timeline it names exists), and its memory-limit notice is filtered.

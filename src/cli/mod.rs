@@ -96,6 +96,14 @@ pub struct GuiArgs {
     /// Frames to play before the screenshot.
     #[arg(long, value_name = "N", default_value_t = 60, requires = "screenshot")]
     pub frames: u64,
+    /// Also save this many pictures while playing, evenly spread over the
+    /// frames, beside the screenshot (`FILE-1.png`, `FILE-2.png`, …).
+    #[arg(long, value_name = "K", default_value_t = 0, requires = "screenshot")]
+    pub burst: u32,
+    /// With `--screenshot`: record the run played to this `.rrd` file, as
+    /// the panel's Record does.
+    #[arg(long, value_name = "FILE.rrd", requires = "screenshot")]
+    pub record: Option<PathBuf>,
 }
 
 /// Options of `weft view`.
@@ -184,6 +192,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         set: Vec::new(),
         screenshot: None,
         frames: 60,
+        burst: 0,
+        record: None,
     }));
     match command {
         Command::Gui(args) => gui(args),
@@ -292,6 +302,8 @@ fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
     let screenshot = args.screenshot.map(|path| crate::app::Screenshot {
         path,
         frames: args.frames,
+        burst: args.burst,
+        record: args.record,
     });
     crate::app::run(&args.preset, &args.set, screenshot)?;
     Ok(ExitCode::SUCCESS)

@@ -14,6 +14,7 @@
 //! gets exactly one run, from its first message. A change of parameters
 //! applies at the next step and is logged at the frame it takes effect.
 
+pub mod follow;
 mod runs;
 pub mod trace;
 mod worker;
@@ -101,6 +102,8 @@ pub(crate) struct Shown {
     /// (the other frames' scalars only), so the viewer is never sent more
     /// than it shows.
     pub(crate) drawn: u64,
+    /// The viewer's time cursor, moved by the session while it plays.
+    pub(crate) follow: follow::Follow,
 }
 
 /// Where a branch starts.
@@ -320,12 +323,21 @@ impl Session {
     /// [`FOLLOWING`] (the viewer's timeline paused) does not hold it back.
     pub fn viewer_shows(&self, recording: String, at: BranchAt) {
         let mut shown = self.shown.lock().expect("not poisoned");
+        shown.follow.reported(&recording, at);
         let back = match (&shown.at, at) {
             (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
             (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
             _ => false,
         };
         shown.at = (!back).then(|| (recording, at, Instant::now()));
+    }
+
+    /// Has the simulation thread call `hook` after it has sent the whole
+    /// drawing of a frame, while it moves the viewer's time cursor
+    /// ([`follow`]): the window sends the viewer, after the frame's drawing,
+    /// a command to put the cursor on that frame.
+    pub fn on_whole_frame(&self, hook: impl Fn(&follow::WholeFrame) + Send + Sync + 'static) {
+        self.shown.lock().expect("not poisoned").follow.hook = Some(Arc::new(hook));
     }
 
     /// Has the simulation thread call `waker` after every change of the

@@ -5,6 +5,7 @@
 mod ghost;
 mod lifecycle;
 mod publish;
+mod send;
 
 use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
@@ -158,7 +159,7 @@ impl Worker {
                     self.set_error(Some(format!("logging to the viewer failed: {e}")));
                 }
                 self.draw_ghost(false);
-                self.run.telemetry.send();
+                self.send_drawing();
             }
             if self.playing && self.viewer_behind() {
                 // Wait for the viewer; then go on at the usual pace, without
@@ -189,12 +190,14 @@ impl Worker {
     fn handle(&mut self, c: Command) {
         match c {
             Command::Play => {
+                self.take_cursor();
                 self.playing = true;
                 self.stop_at = None;
                 self.next_step = Instant::now();
                 self.await_viewer();
             }
             Command::PlayTo(frame) => {
+                self.take_cursor();
                 self.playing = self.run.scene.frame() < frame;
                 self.stop_at = Some(frame);
                 self.next_step = Instant::now();
@@ -202,6 +205,7 @@ impl Worker {
             }
             Command::Pause => self.playing = false,
             Command::Step => {
+                self.take_cursor();
                 self.playing = false;
                 self.step();
             }
@@ -272,7 +276,7 @@ impl Worker {
             Command::Ghost(on) => {
                 self.show_ghost = on;
                 self.draw_ghost(true);
-                self.run.telemetry.send();
+                self.send_drawing();
             }
             Command::Grab(at) => {
                 let at = glam::Vec3::from_array(at).as_dvec3() + self.seen_to_now();
@@ -411,7 +415,7 @@ impl Worker {
                 self.draw_ghost(false);
                 if draws {
                     // The frame's drawing, the ghost with it, sent whole.
-                    self.run.telemetry.send();
+                    self.send_drawing();
                 }
             }
             Err(e) => {
