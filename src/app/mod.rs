@@ -195,6 +195,12 @@ impl WeftApp {
                     .and_then(|db| db.ingestion_stats().latency_snapshot().e2e());
                 if status.playing && self.drawn.0 > 0 {
                     self.latency = self.latency.max(latency.unwrap_or(0.0));
+                    re_log::debug!(
+                        "frame {} at {:.2} s, Rerun's latency {latency:?}, view behind by at most {:.2} s",
+                        status.frame,
+                        started.elapsed().as_secs_f64(),
+                        self.lag
+                    );
                 }
                 if status.playing
                     && let Some(times) = whole::last_logged(&self.viewer)

@@ -319,8 +319,10 @@ impl Session {
     /// (reported each time it moves). While it moves forward, following the
     /// stream, a paced simulation keeps no more than [`MAX_LEAD`] seconds
     /// ahead of it: it never runs ahead of what the viewer can take in and
-    /// draw. A cursor moved back (the user scrubbed) or standing still for
-    /// [`FOLLOWING`] (the viewer's timeline paused) does not hold it back.
+    /// draw. A cursor moved back (the user scrubbed), or on another
+    /// recording, does not hold it back, nor, unless the session moves the
+    /// cursor ([`follow`]), one standing still for [`FOLLOWING`] (the
+    /// viewer's timeline paused).
     pub fn viewer_shows(&self, recording: String, at: BranchAt) {
         let mut shown = self.shown.lock().expect("not poisoned");
         shown.follow.reported(&recording, at);

@@ -151,8 +151,12 @@ impl Worker {
                 self.stop_at = None;
                 self.publish_progress();
             }
-            if !self.playing && self.drawing_behind {
-                // Stopped on a frame sent without its drawing: send it.
+            let behind = self.playing && self.viewer_behind();
+            if self.drawing_behind && (!self.playing || behind) {
+                // Stopped, or waiting for the viewer, on a frame sent
+                // without its drawing: send it (the viewer's cursor goes
+                // only to frames drawn whole, so waiting for it to reach a
+                // frame never drawn would wait for ever).
                 self.drawing_behind = false;
                 self.run.telemetry.set_visuals(true);
                 if let Err(e) = self.run.telemetry.redraw(&self.run.scene) {
@@ -161,7 +165,7 @@ impl Worker {
                 self.draw_ghost(false);
                 self.send_drawing();
             }
-            if self.playing && self.viewer_behind() {
+            if behind {
                 // Wait for the viewer; then go on at the usual pace, without
                 // catching up.
                 std::thread::sleep(Duration::from_millis(2));
@@ -328,13 +332,18 @@ impl Worker {
     }
 
     /// Whether the viewer, following the current run, shows a frame more
-    /// than [`MAX_LEAD`] seconds behind the simulation's.
+    /// than [`MAX_LEAD`] seconds behind the simulation's. While the session
+    /// moves the viewer's cursor, a cursor that has not moved for a while is
+    /// a viewer slow to take in and draw what it was sent, which the
+    /// simulation waits for however long it takes; left to the viewer, it
+    /// may be one the user stopped.
     fn viewer_behind(&self) -> bool {
         let shown = self.shown.lock().expect("not poisoned");
         let Some((id, at, when)) = shown.at.as_ref().filter(|_| shown.pace) else {
             return false;
         };
-        if *id != self.info.recording_id || when.elapsed() > FOLLOWING {
+        let stopped = when.elapsed() > FOLLOWING && !shown.follow.is_on();
+        if *id != self.info.recording_id || stopped {
             return false;
         }
         let frame = match *at {
