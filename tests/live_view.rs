@@ -165,17 +165,35 @@ fn a_cursor_moved_back_is_the_user_s() {
             .filter(|s| matches!(s, Sent::Cursor(..)))
             .count()
     };
+    let dt = session.status().preset.unwrap().solver.dt as f64;
+    let nanos = |f: u64| std::time::Duration::from_secs_f64(f as f64 * dt).as_nanos() as f64;
+    // The window draws every 10 ms, and the viewer reports its cursor
+    // when the session has put it on another frame (on `sim_time`).
+    let reported = Mutex::new(None);
     let draw_while = |until: u64| {
         while !session.wait_for(Duration::from_millis(10), |s| s.frame >= until) {
             session.window_drew();
+            let last = sent.lock().unwrap().iter().rev().find_map(|s| match s {
+                Sent::Cursor(id, f) => Some((id.clone(), *f)),
+                Sent::Chunk(..) => None,
+            });
+            let mut reported = reported.lock().unwrap();
+            if let Some((id, f)) = last
+                && *reported != Some(f)
+            {
+                *reported = Some(f);
+                session.viewer_shows(id, BranchAt::Time(nanos(f) * 1e-9));
+            }
         }
     };
     session.send(Command::Play);
     draw_while(20);
     let id = session.status().run.recording_id;
     assert!(cursors(&sent) > 2);
-    // Scrubbed back while playing.
+    // Scrubbed back while playing, between two frames.
     session.viewer_shows(id, BranchAt::Time(0.1234));
+    // (A cursor being sent as the user moved it arrives.)
+    std::thread::sleep(Duration::from_millis(100));
     let before = cursors(&sent);
     let frame = session.status().frame;
     draw_while(frame + 30);

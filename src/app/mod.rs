@@ -404,6 +404,7 @@ pub fn run(
     let panel = Panel::new(&session.status());
     let link = panel.link();
     let timeline = panel.link();
+    let reports = session.cursor_reports();
     session.on_whole_frame(move |frame| {
         let timeline = timeline.lock().expect("not poisoned").timeline.clone();
         // Sent after the frame's drawing: the viewer takes it in order.
@@ -413,7 +414,18 @@ pub fn run(
     });
     let (options, scratch) = window_options(screenshot.is_some());
     let startup = re_viewer::StartupOptions {
-        on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
+        on_event: Some(Rc::new(move |e| {
+            let moves = link.lock().expect("not poisoned").cursor_moves;
+            on_viewer_event(&link, e);
+            // A simulation waiting for the viewer goes on at once, not when
+            // the panel next draws (nothing may ask for that soon).
+            let link = link.lock().expect("not poisoned");
+            if link.cursor_moves != moves
+                && let Some((id, at)) = link.cursor.clone()
+            {
+                reports.shows(id, at);
+            }
+        })),
         // A screenshot shows the window as it opens, not as last left.
         persist_state: screenshot.is_none(),
         ..Default::default()

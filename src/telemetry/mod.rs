@@ -25,7 +25,7 @@
 //! | `metrics/normals/{flipped,offset_rms}` | the normals against the surface | summary |
 //! | `metrics/time/…` | update, adjust per family, collisions, telemetry, total (ms) | summary |
 //! | `params` | solver parameters (TOML), at every change | always |
-//! | `events` | parameter changes, solver failures | always |
+//! | `events` | parameter changes, a drag's start and end (`drag.rs`), solver failures | always |
 //! | `preset`, `weft`, `cloth/topology` | resolved preset, version, topology | static |
 //!
 //! Timelines: `frame` (sequence) and `sim_time` (seconds).

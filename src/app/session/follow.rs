@@ -48,14 +48,6 @@ impl WholeFrame {
             BranchAt::Time(t) => (t * 1e9 - self.sim_time_ns as f64).abs() < 2.0,
         }
     }
-
-    /// Whether the cursor reported at `at` is before this frame.
-    fn is_after(&self, at: BranchAt) -> bool {
-        match at {
-            BranchAt::Frame(f) => f < self.frame,
-            BranchAt::Time(t) => t * 1e9 < self.sim_time_ns as f64 - 2.0,
-        }
-    }
 }
 
 /// What the window does with a [`WholeFrame`]: send the viewer a command,
@@ -96,17 +88,17 @@ impl Follow {
         Some(hook)
     }
 
-    /// The viewer reports its cursor at `at` on `recording`: a cursor
-    /// before the last frame sent, at none of the frames sent, was moved
-    /// by the user, who then has it.
-    pub(crate) fn reported(&mut self, recording: &str, at: BranchAt) {
-        let Some(last) = self.sent.back() else {
-            return;
-        };
-        if last.recording_id != recording || self.sent.iter().any(|f| f.is_at(at)) {
-            return;
-        }
-        if last.is_after(at) {
+    /// The viewer reports its cursor at `at` on `recording`, `back` from
+    /// where it last reported it there: a cursor moved back, to none of
+    /// the frames sent, was moved by the user, who then has it. (The
+    /// session's commands, and the viewer following the stream on its own
+    /// before the first of them lands, only move it forward.)
+    pub(crate) fn reported(&mut self, recording: &str, at: BranchAt, back: bool) {
+        let ours = self
+            .sent
+            .iter()
+            .any(|f| f.recording_id == recording && f.is_at(at));
+        if back && !ours {
             self.on = false;
             self.sent.clear();
         }
@@ -153,15 +145,16 @@ mod tests {
         for f in 2..6 {
             show(&mut follow, f);
         }
-        // The viewer catching up, and following on its own past the last
-        // frame sent: still the session's.
-        follow.reported("r", BranchAt::Time(3.0 / 60.0));
-        follow.reported("r", BranchAt::Frame(4));
-        follow.reported("r", BranchAt::Frame(7));
-        follow.reported("other", BranchAt::Frame(0));
+        // The viewer following on its own before the commands land, then
+        // catching up, back to a frame sent: still the session's.
+        follow.reported("r", BranchAt::Frame(1), false);
+        follow.reported("r", BranchAt::Time(3.0 / 60.0), false);
+        follow.reported("r", BranchAt::Frame(7), false);
+        follow.reported("r", BranchAt::Frame(4), true);
+        follow.reported("other", BranchAt::Frame(0), true);
         assert!(follow.is_on());
         // Scrubbed back between frames: the user's.
-        follow.reported("r", BranchAt::Time(2.5 / 60.0));
+        follow.reported("r", BranchAt::Time(2.5 / 60.0), true);
         assert!(!follow.is_on());
         show(&mut follow, 6);
         assert_eq!(*shown.lock().unwrap(), vec![2, 3, 4, 5]);

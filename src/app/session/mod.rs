@@ -106,6 +106,25 @@ pub(crate) struct Shown {
     pub(crate) follow: follow::Follow,
 }
 
+/// Where the viewer's time cursor is, for pacing the simulation
+/// ([`Session::viewer_shows`]).
+#[derive(Clone)]
+pub struct CursorReports(Arc<Mutex<Shown>>);
+
+impl CursorReports {
+    /// See [`Session::viewer_shows`].
+    pub fn shows(&self, recording: String, at: BranchAt) {
+        let mut shown = self.0.lock().expect("not poisoned");
+        let back = match (&shown.at, at) {
+            (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
+            (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
+            _ => false,
+        };
+        shown.follow.reported(&recording, at, back);
+        shown.at = (!back).then(|| (recording, at, Instant::now()));
+    }
+}
+
 /// Where a branch starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum BranchAt {
@@ -324,14 +343,13 @@ impl Session {
     /// cursor ([`follow`]), one standing still for [`FOLLOWING`] (the
     /// viewer's timeline paused).
     pub fn viewer_shows(&self, recording: String, at: BranchAt) {
-        let mut shown = self.shown.lock().expect("not poisoned");
-        shown.follow.reported(&recording, at);
-        let back = match (&shown.at, at) {
-            (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
-            (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
-            _ => false,
-        };
-        shown.at = (!back).then(|| (recording, at, Instant::now()));
+        self.cursor_reports().shows(recording, at);
+    }
+
+    /// What the viewer's event callback reports the time cursor to, at once
+    /// (the panel, which also reads it, draws only at the next frame).
+    pub fn cursor_reports(&self) -> CursorReports {
+        CursorReports(self.shown.clone())
     }
 
     /// Has the simulation thread call `hook` after it has sent the whole

@@ -337,13 +337,25 @@ impl Worker {
     /// a viewer slow to take in and draw what it was sent, which the
     /// simulation waits for however long it takes; left to the viewer, it
     /// may be one the user stopped.
+    ///
+    /// A viewer that reports nothing at all for [`FOLLOWING`] while the
+    /// session moves its cursor (one that does not take the commands)
+    /// lets one frame through each time, so the simulation crawls rather
+    /// than stops.
     fn viewer_behind(&self) -> bool {
-        let shown = self.shown.lock().expect("not poisoned");
-        let Some((id, at, when)) = shown.at.as_ref().filter(|_| shown.pace) else {
+        let mut shown = self.shown.lock().expect("not poisoned");
+        let following = shown.follow.is_on();
+        let pace = shown.pace;
+        let Some((id, at, when)) = shown.at.as_mut().filter(|_| pace) else {
             return false;
         };
-        let stopped = when.elapsed() > FOLLOWING && !shown.follow.is_on();
-        if *id != self.info.recording_id || stopped {
+        if *id != self.info.recording_id {
+            return false;
+        }
+        if when.elapsed() > FOLLOWING {
+            if following {
+                *when = Instant::now();
+            }
             return false;
         }
         let frame = match *at {
