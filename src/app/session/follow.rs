@@ -151,7 +151,7 @@ mod tests {
         follow.reported("r", BranchAt::Time(3.0 / 60.0), false);
         follow.reported("r", BranchAt::Frame(7), false);
         follow.reported("r", BranchAt::Frame(4), true);
-        follow.reported("other", BranchAt::Frame(0), true);
+        follow.reported("other", BranchAt::Frame(0), false);
         assert!(follow.is_on());
         // Scrubbed back between frames: the user's.
         follow.reported("r", BranchAt::Time(2.5 / 60.0), true);
