@@ -1149,10 +1149,22 @@ fn a_rejected_typed_value_changes_nothing() {
     let message = h.get_by_label_contains("environment.wind.velocity");
     let text = message.value().unwrap_or_default();
     assert!(text.contains("out of range"), "{text}");
-    // The status line is above the panel's parts.
+    // Beside the wind's controls, under them, not at the top of the panel.
+    let velocity = h.get_by_label("velocity").rect();
+    let telemetry = h.get_by_label("Telemetry").rect();
     assert!(
-        message.rect().max.y < h.get_by_label("Load").rect().min.y,
-        "{text}"
+        message.rect().min.y > velocity.max.y
+            && message.rect().max.y < telemetry.min.y
+            && message.rect().min.y - velocity.max.y < 120.0,
+        "{text}: at {:?}, the wind's velocity at {velocity:?}",
+        message.rect()
+    );
+    // The next valid input clears it.
+    set_slider(&mut h, "λ curvature", 0.3);
+    assert!(
+        h.query_by_label_contains("environment.wind.velocity")
+            .is_none(),
+        "the refusal stays after a valid input"
     );
     // The field shows the value in force again.
     let row = h.get_by_label("velocity");
@@ -1275,6 +1287,34 @@ fn the_branch_field_is_the_users() {
             .session
             .wait_for(WAIT, |s| s.run.number == 3 && s.frame == 5)
     );
+}
+
+/// The branch field follows the run: after Reset it reads the new run's
+/// frame, not the old run's time cursor. (After a pause, the session puts
+/// the viewer's cursor on the frame it stopped on, which the field then
+/// reads: `tests/live_view.rs`.)
+#[test]
+fn the_branch_field_follows_the_run() {
+    let s = state("hanging_sheet");
+    let link = s.panel.link();
+    let mut h = harness(s);
+    h.run();
+    for _ in 0..12 {
+        h.state().session.send(Command::Step);
+    }
+    assert!(h.state().session.wait_for(WAIT, |s| s.frame == 12));
+    let id = h.state().session.status().run.recording_id;
+    let dt = h.state().session.status().preset.unwrap().solver.dt as f64;
+    link.lock().unwrap().time(id, 9.0 * dt * 1e9);
+    h.run();
+    h.get_by_label_contains("(time cursor");
+    press(&mut h, egui::Key::Backspace);
+    assert!(h.state().session.wait_for(WAIT, |s| s.run.number == 2));
+    h.run();
+    h.run();
+    assert!(h.query_by_label_contains("(time cursor").is_none());
+    let row = h.get_by_label("at frame");
+    assert_eq!(field_on_row(&h, row, 0).value().as_deref(), Some("0"));
 }
 
 /// While the viewer follows the run, the simulation keeps no more than

@@ -103,8 +103,19 @@ fn a_drag_pulls_the_particle_and_replays_bit_for_bit() {
             .map(|(f, _)| *f)
             .collect()
     };
-    assert_eq!(events("pull → {"), vec![6]);
-    assert_eq!(events("pull → none"), vec![26]);
+    // The drag is two events, its start and its end (with its path), in
+    // millimetres.
+    assert_eq!(events("grabbed particle"), vec![6]);
+    assert_eq!(events("let go of particle"), vec![26]);
+    assert!(
+        !rec.events.iter().any(|(_, m)| m.contains("pull.target")),
+        "{:?}",
+        rec.events
+    );
+    let (_, end) = rec.events.iter().find(|(f, _)| *f == 26).unwrap();
+    // The grab and the first move were one change; two moves followed.
+    assert!(end.contains("in 2 moves, along"), "{end}");
+    assert!(!end.contains("0000"), "{end}");
     // Drawn from the grab to the frame before the release, blanked at it.
     assert_eq!(
         rec.frames(paths::PULL),

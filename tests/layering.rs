@@ -219,7 +219,8 @@ fn every_module_uses_only_the_layers_below_it() {
             .filter(|p| p.is_dir() || p.extension().is_some_and(|e| e == "rs"))
             .filter_map(|p| {
                 let name = p.file_stem()?.to_str()?.to_string();
-                (!["lib", "main", "cloth", "examples", "benches"].contains(&name.as_str())).then_some(name)
+                (!["lib", "main", "cloth", "examples", "benches"].contains(&name.as_str()))
+                    .then_some(name)
             })
             .collect()
     };

@@ -41,7 +41,7 @@ fn the_window_shows_the_cloth_and_the_panel() {
         ])
         .arg("--screenshot")
         .arg(&shot)
-        .args(["--frames", "300"])
+        .args(["--frames", "300", "--burst", "4"])
         .env_remove("WAYLAND_DISPLAY")
         .current_dir(dir.path())
         .output()
@@ -63,6 +63,32 @@ fn the_window_shows_the_cloth_and_the_panel() {
         .and_then(|t| t.parse().ok())
         .unwrap_or_else(|| panic!("no lag reported:\n{stderr}"));
     assert!(behind <= 0.5, "the view was {behind} s behind:\n{stderr}");
+    // Each time the window drew while playing, the 3D view drew one frame:
+    // what the viewer held of the particles, the framing points and the
+    // mesh at its time cursor was logged at the same frame.
+    let (drew, mixed): (u64, u64) = stderr
+        .split("of the ")
+        .nth(1)
+        .and_then(|t| {
+            let drew = t.split(' ').next()?.parse().ok()?;
+            let mixed = t.split("mixed two frames ").nth(1)?.split(' ').next()?;
+            Some((drew, mixed.parse().ok()?))
+        })
+        .unwrap_or_else(|| panic!("no count of mixed frames:\n{stderr}"));
+    assert!(drew > 10, "the window drew {drew} times while playing");
+    assert_eq!(mixed, 0, "{stderr}");
+    // The pictures taken while playing show the cloth too, whole: the
+    // camera, tracking points logged with the cloth's frame, keeps it in
+    // the view at the car's speed (nothing of it on the view's edges).
+    for k in 1..=4 {
+        let burst = image::open(dir.path().join(format!("window-{k}.png")))
+            .unwrap()
+            .to_rgba8();
+        let cloth = share(&burst, (0.02, 0.45), (0.07, 0.77), sand);
+        assert!(cloth > 0.01, "no cloth in picture {k} ({cloth})");
+        let touching = on_edges(&burst);
+        assert_eq!(touching, 0, "picture {k}: the cloth on the view's edges");
+    }
     // Nothing for the viewer to pop up as a notification over the panel at
     // start: its layout arrives after the first frame (so the `sim_time`
     // timeline it names exists), and its memory-limit notice is filtered.
@@ -111,6 +137,18 @@ fn sand([r, g, b, _]: [u8; 4]) -> bool {
 /// its title bar, left of the plots, above the events.
 const VIEW: ((u32, u32), (u32, u32)) = ((2, 632), (56, 666));
 
+/// How many of the cloth's pixels lie on the 3D view's edges (a band 4
+/// pixels wide) in a window's picture.
+fn on_edges(img: &image::RgbaImage) -> usize {
+    let ((x0, x1), (y0, y1)) = VIEW;
+    let band = 4;
+    (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .filter(|&(x, y)| x < x0 + band || x >= x1 - band || y < y0 + band || y >= y1 - band)
+        .filter(|&(x, y)| sand(img.get_pixel(x, y).0))
+        .count()
+}
+
 /// Every shipped preset opens on its cloth whole and large: in the window
 /// after one second (`--frames 60`), the cloth covers a good part of the 3D
 /// view and no pixel of it touches the view's edges (the camera stands far
@@ -147,12 +185,7 @@ fn every_shipped_preset_opens_on_its_whole_cloth() {
             .filter(|&(x, y)| at(x, y))
             .count() as f32
             / ((x1 - x0) * (y1 - y0)) as f32;
-        let band = 4;
-        let edge: Vec<(u32, u32)> = (y0..y1)
-            .flat_map(|y| (x0..x1).map(move |x| (x, y)))
-            .filter(|&(x, y)| x < x0 + band || x >= x1 - band || y < y0 + band || y >= y1 - band)
-            .collect();
-        let touching = edge.iter().filter(|&&(x, y)| at(x, y)).count();
+        let touching = on_edges(&img);
         report.push(format!(
             "{}: cloth {:.1} % of the view, {touching} pixels on its edges",
             preset.name,

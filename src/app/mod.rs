@@ -28,6 +28,7 @@ pub mod pull;
 pub mod ruler;
 pub mod session;
 mod view;
+pub mod whole;
 
 pub use view::view;
 
@@ -53,11 +54,17 @@ pub struct Screenshot {
     pub path: PathBuf,
     /// Frames to play first.
     pub frames: u64,
+    /// A recording to start at once, before playing.
+    pub record: Option<PathBuf>,
+    /// Pictures to take while playing as well, evenly spread over the
+    /// frames (`FILE-1.png`, `FILE-2.png`, …).
+    pub burst: u32,
 }
 
-/// Marks the screenshot weft asks egui for (the viewer has its own).
+/// Marks a screenshot weft asks egui for (the viewer has its own): the
+/// last picture (`None`) or one of a burst taken while playing.
 #[derive(Clone, Copy, Debug)]
-struct WeftScreenshot;
+struct WeftScreenshot(Option<u32>);
 
 /// Where `--screenshot` is: playing, waiting for the viewer to show the
 /// last frame, then waiting for egui's picture.
@@ -77,6 +84,15 @@ pub struct WeftApp {
     /// With `--screenshot`: how far (simulated seconds) the viewer's time
     /// cursor was at most behind the simulation while playing.
     lag: f64,
+    /// With `--screenshot`: how many times the window drew while playing,
+    /// and how many of those the 3D view mixed two frames ([`whole`]).
+    drawn: (u64, u64),
+    /// With `--screenshot`: the most Rerun's "Latency" (the top bar's:
+    /// seconds from logging to the viewer, averaged over a second) read
+    /// while playing.
+    latency: f32,
+    /// With `--screenshot --burst`: the burst pictures asked for so far.
+    burst_taken: u32,
     /// A drag begun on the viewer's time ruler, moved to scrub.
     scrub: ruler::Scrub,
     /// Ctrl-drag on the cloth ([`pull`]).
@@ -134,6 +150,8 @@ impl eframe::App for WeftApp {
 impl WeftApp {
     /// Drives `--screenshot` with egui's screenshot viewport command: the
     /// picture is what the window rendered, whatever the display does.
+    /// While playing, it also counts the times the 3D view mixed two
+    /// frames, and takes the `--burst` pictures.
     fn take_screenshot(&mut self, ctx: &egui::Context) {
         let Some((shot, state, started)) = &mut self.screenshot else {
             return;
@@ -142,8 +160,17 @@ impl WeftApp {
             re_log::error!("--screenshot: gave up after 300 s");
             std::process::exit(2);
         }
+        for (k, image) in shots_taken(ctx) {
+            if let Some(k) = k {
+                let path = burst_path(&shot.path, k);
+                save_png(&image, &path);
+            }
+        }
         match state {
             Shot::Start => {
+                if let Some(file) = &shot.record {
+                    self.session.send(Command::StartRecording(file.clone()));
+                }
                 self.session.send(Command::PlayTo(shot.frames));
                 *state = Shot::Playing;
             }
@@ -162,25 +189,58 @@ impl WeftApp {
                     };
                     self.lag = self.lag.max(status.time - shown);
                 }
+                let latency = self
+                    .viewer
+                    .recording_db()
+                    .and_then(|db| db.ingestion_stats().latency_snapshot().e2e());
+                if status.playing && self.drawn.0 > 0 {
+                    self.latency = self.latency.max(latency.unwrap_or(0.0));
+                    re_log::debug!(
+                        "frame {} at {:.2} s, Rerun's latency {latency:?}, view behind by at most {:.2} s",
+                        status.frame,
+                        started.elapsed().as_secs_f64(),
+                        self.lag
+                    );
+                }
+                if status.playing
+                    && let Some(times) = whole::last_logged(&self.viewer)
+                {
+                    self.drawn.0 += 1;
+                    if whole::mixed(&times) {
+                        self.drawn.1 += 1;
+                        re_log::debug!("the 3D view mixed frames: {times:?}");
+                    }
+                }
+                let next =
+                    shot.frames * u64::from(self.burst_taken + 1) / u64::from(shot.burst + 1);
+                if self.burst_taken < shot.burst && status.playing && status.frame >= next {
+                    self.burst_taken += 1;
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::new(
+                        WeftScreenshot(Some(self.burst_taken)),
+                    )));
+                }
                 if status.frame >= shot.frames && !status.playing {
                     *state = Shot::Settling(30);
                 }
             }
             Shot::Settling(0) => {
                 ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::new(
-                    WeftScreenshot,
+                    WeftScreenshot(None),
                 )));
                 *state = Shot::Requested;
             }
             Shot::Settling(n) => *n -= 1,
             Shot::Requested => {
-                if let Some(image) = shot_taken(ctx) {
+                if let Some((_, image)) = shots_taken(ctx).into_iter().find(|(k, _)| k.is_none()) {
                     let [w, h] = save_png(&image, &shot.path);
                     eprintln!(
-                        "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation",
+                        "saved the window ({w}×{h}) at frame {} to {}; while playing, the view was at most {:.2} s behind the simulation (Rerun's latency at most {:.2} s), and of the {} times the window drew, the 3D view mixed two frames {} times",
                         self.session.status().frame,
                         shot.path.display(),
-                        self.lag
+                        self.lag,
+                        self.latency,
+                        self.drawn.0,
+                        self.drawn.1,
                     );
                     ctx.send_viewport_cmd(egui::ViewportCommand::Close);
                 }
@@ -208,6 +268,12 @@ fn viewer_memory_limit(text: &str) -> anyhow::Result<re_memory::MemoryLimit> {
         );
     }
     Ok(limit)
+}
+
+/// Where `--burst`'s picture `k` goes: beside `path`, numbered.
+fn burst_path(path: &std::path::Path, k: u32) -> PathBuf {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    path.with_file_name(format!("{stem}-{k}.png"))
 }
 
 /// The embedded viewer, set up in the window being created (with a warning
@@ -250,21 +316,23 @@ fn window_options(screenshot: bool) -> (eframe::NativeOptions, Option<PathBuf>) 
     (options, scratch)
 }
 
-/// The picture egui took for [`WeftScreenshot`], once it has arrived.
-fn shot_taken(ctx: &egui::Context) -> Option<std::sync::Arc<egui::ColorImage>> {
+/// The pictures egui took for [`WeftScreenshot`]s that arrived this frame.
+fn shots_taken(ctx: &egui::Context) -> Vec<(Option<u32>, std::sync::Arc<egui::ColorImage>)> {
     ctx.input(|i| {
-        i.raw.events.iter().find_map(|e| match e {
-            egui::Event::Screenshot {
-                image, user_data, ..
-            } if user_data
-                .data
-                .as_ref()
-                .is_some_and(|d| d.is::<WeftScreenshot>()) =>
-            {
-                Some(image.clone())
-            }
-            _ => None,
-        })
+        i.raw
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                egui::Event::Screenshot {
+                    image, user_data, ..
+                } => user_data
+                    .data
+                    .as_ref()
+                    .and_then(|d| d.downcast_ref::<WeftScreenshot>())
+                    .map(|w| (w.0, image.clone())),
+                _ => None,
+            })
+            .collect()
     })
 }
 
@@ -345,6 +413,7 @@ pub fn run(
     let _guard = runtime.enter();
     let main_thread_token = re_viewer::MainThreadToken::i_promise_i_am_on_the_main_thread();
     let (tx, rx) = re_log_channel::log_channel(re_log_channel::LogSource::Sdk);
+    let cursor_tx = tx.clone();
     let session = Session::start(
         loaded,
         preset.to_string(),
@@ -358,9 +427,29 @@ pub fn run(
     let mut panel = Panel::new(&session.status());
     panel.memory_limit = memory_text;
     let link = panel.link();
+    let timeline = panel.link();
+    let reports = session.cursor_reports();
+    session.on_whole_frame(move |frame| {
+        let timeline = timeline.lock().expect("not poisoned").timeline.clone();
+        // Sent after the frame's drawing: the viewer takes it in order.
+        cursor_tx
+            .send(whole::cursor_command(frame, timeline.as_deref()))
+            .ok();
+    });
     let (options, scratch) = window_options(screenshot.is_some());
     let startup = re_viewer::StartupOptions {
-        on_event: Some(Rc::new(move |e| on_viewer_event(&link, e))),
+        on_event: Some(Rc::new(move |e| {
+            let moves = link.lock().expect("not poisoned").cursor_moves;
+            on_viewer_event(&link, e);
+            // A simulation waiting for the viewer goes on at once, not when
+            // the panel next draws (nothing may ask for that soon).
+            let link = link.lock().expect("not poisoned");
+            if link.cursor_moves != moves
+                && let Some((id, at)) = link.cursor.clone()
+            {
+                reports.shows(id, at);
+            }
+        })),
         // A screenshot shows the window as it opens, not as last left.
         persist_state: screenshot.is_none(),
         ..Default::default()
@@ -384,6 +473,9 @@ pub fn run(
                 session,
                 screenshot: screenshot.map(|s| (s, Shot::Start, Instant::now())),
                 lag: 0.0,
+                drawn: (0, 0),
+                latency: 0.0,
+                burst_taken: 0,
                 scrub: ruler::Scrub::default(),
                 gesture: pull::Gesture::default(),
             }))

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use super::{WeftScreenshot, save_png, shot_taken, viewer_app, window_options};
+use super::{WeftScreenshot, save_png, shots_taken, viewer_app, window_options};
 
 /// How long `--screenshot` gives the viewer to load the files and draw
 /// them before taking the picture.
@@ -32,10 +32,10 @@ impl eframe::App for ViewApp {
         };
         if !*asked && started.elapsed() > SETTLE {
             ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::UserData::new(
-                WeftScreenshot,
+                WeftScreenshot(None),
             )));
             *asked = true;
-        } else if let Some(image) = shot_taken(ctx) {
+        } else if let Some((_, image)) = shots_taken(ctx).pop() {
             let [w, h] = save_png(&image, path);
             eprintln!("saved the window ({w}×{h}) to {}", path.display());
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);

@@ -106,6 +106,14 @@ pub struct GuiArgs {
     /// first (docs/debugger.md, "Memory while playing").
     #[arg(long, value_name = "LIMIT", default_value = VIEWER_MEMORY_LIMIT)]
     pub memory_limit: String,
+    /// Also save this many pictures while playing, evenly spread over the
+    /// frames, beside the screenshot (`FILE-1.png`, `FILE-2.png`, …).
+    #[arg(long, value_name = "K", default_value_t = 0, requires = "screenshot")]
+    pub burst: u32,
+    /// With `--screenshot`: record the run played to this `.rrd` file, as
+    /// the panel's Record does.
+    #[arg(long, value_name = "FILE.rrd", requires = "screenshot")]
+    pub record: Option<PathBuf>,
 }
 
 /// Options of `weft view`.
@@ -195,6 +203,8 @@ pub fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         screenshot: None,
         memory_limit: VIEWER_MEMORY_LIMIT.into(),
         frames: 60,
+        burst: 0,
+        record: None,
     }));
     match command {
         Command::Gui(args) => gui(args),
@@ -303,6 +313,8 @@ fn gui(args: GuiArgs) -> anyhow::Result<ExitCode> {
     let screenshot = args.screenshot.map(|path| crate::app::Screenshot {
         path,
         frames: args.frames,
+        burst: args.burst,
+        record: args.record,
     });
     crate::app::run(&args.preset, &args.set, &args.memory_limit, screenshot)?;
     Ok(ExitCode::SUCCESS)

@@ -17,10 +17,15 @@ pub fn describe_changes(old: &Tuning, new: &Tuning) -> String {
     }
 }
 
-/// A value as a person writes it: floats in their shortest `f32` form.
+/// A value as a person writes it: floats (alone or in a list) in their
+/// shortest `f32` form.
 fn short(v: &toml::Value) -> String {
     match v {
         toml::Value::Float(f) => (*f as f32).to_string(),
+        toml::Value::Array(a) => {
+            let items: Vec<String> = a.iter().map(short).collect();
+            format!("[{}]", items.join(", "))
+        }
         other => other.to_string(),
     }
 }
@@ -69,7 +74,7 @@ mod tests {
         moved.pull.as_mut().unwrap().target.z = 1.5;
         assert_eq!(
             describe_changes(&held, &moved),
-            "pull.target [0.5, 0.0, 1.0] → [0.5, 0.0, 1.5]"
+            "pull.target [0.5, 0, 1] → [0.5, 0, 1.5]"
         );
         assert_eq!(describe_changes(&moved, &free), "pull → none");
     }

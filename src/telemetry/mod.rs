@@ -25,7 +25,7 @@
 //! | `metrics/normals/{flipped,offset_rms}` | the normals against the surface | summary |
 //! | `metrics/time/…` | update, adjust per family, collisions, telemetry, total (ms) | summary |
 //! | `params` | solver parameters (TOML), at every change | always |
-//! | `events` | parameter changes, solver failures | always |
+//! | `events` | parameter changes, a drag's start and end (`drag.rs`), solver failures | always |
 //! | `preset`, `weft`, `cloth/topology` | resolved preset, version, topology | static |
 //!
 //! Timelines: `frame` (sequence) and `sim_time` (seconds).
@@ -39,6 +39,7 @@ pub mod blueprint;
 mod changes;
 mod colliders;
 pub mod color;
+mod drag;
 pub mod framing;
 mod full;
 pub mod ghost;
@@ -111,6 +112,8 @@ pub struct Telemetry {
     visuals: bool,
     /// Whether the last logged frame drew a pull.
     pull_drawn: bool,
+    /// The drag under way, for its events ([`drag`]).
+    drag: drag::Drag,
 }
 
 impl Telemetry {
@@ -129,6 +132,7 @@ impl Telemetry {
             crossings_drawn: false,
             visuals: true,
             pull_drawn: false,
+            drag: drag::Drag::default(),
         }
     }
 
@@ -350,13 +354,22 @@ impl Telemetry {
             &rerun::TextDocument::new(text).with_media_type(rerun::MediaType::plain_text()),
         )?;
         let message = match &self.last_tuning {
-            None => "initial parameters".to_string(),
-            Some(old) => format!("parameters changed: {}", describe_changes(old, tuning)),
+            None => Some("initial parameters".to_string()),
+            Some(old) => match self.drag.said(old, tuning, frame) {
+                drag::Said::NotADrag => Some(format!(
+                    "parameters changed: {}",
+                    describe_changes(old, tuning)
+                )),
+                drag::Said::Nothing => None,
+                drag::Said::Event(text) => Some(text),
+            },
         };
-        self.rec.log(
-            paths::EVENTS,
-            &rerun::TextLog::new(message).with_level(rerun::TextLogLevel::INFO),
-        )?;
+        if let Some(message) = message {
+            self.rec.log(
+                paths::EVENTS,
+                &rerun::TextLog::new(message).with_level(rerun::TextLogLevel::INFO),
+            )?;
+        }
         self.last_tuning = Some(*tuning);
         Ok(())
     }

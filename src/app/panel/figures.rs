@@ -24,6 +24,7 @@ impl Panel {
                     "frame",
                     format!("{} ({:.2} s)", status.frame, status.time),
                 );
+                row(ui, "3D view", self.view_lag(status));
                 row(ui, "steps/s", format!("{:.0}", status.steps_per_second));
                 row(ui, "step time", format!("{:.2} ms", status.step_ms));
                 row(ui, "max strain", format!("{:.4}", status.max_strain));
@@ -55,6 +56,32 @@ impl Panel {
                 status.run.recording_id,
                 status.runs.len()
             ));
+    }
+
+    /// Where the viewer's time cursor is against the simulation: weft's
+    /// own measure of how far behind the picture is, in simulated seconds
+    /// (Rerun's "Latency", in its top bar, counts wall-clock seconds from
+    /// logging to the viewer, which include the time a simulation held
+    /// back by a slow viewer waits).
+    fn view_lag(&self, status: &Status) -> String {
+        let cursor = self.link.lock().expect("not poisoned").cursor.clone();
+        let dt = status.preset.as_ref().map_or(0.0, |p| p.solver.dt) as f64;
+        match cursor {
+            Some((id, at)) if id == status.run.recording_id => {
+                let shown = match at {
+                    crate::app::session::BranchAt::Frame(f) => f as f64 * dt,
+                    crate::app::session::BranchAt::Time(t) => t,
+                };
+                let behind = status.time - shown;
+                if behind.abs() < 0.5 * dt {
+                    format!("{shown:.2} s, this frame")
+                } else {
+                    format!("{shown:.2} s, {behind:.2} s behind")
+                }
+            }
+            Some(_) => "another run".into(),
+            None => "—".into(),
+        }
     }
 
     /// The preset's `[expect]` bounds against the run so far.

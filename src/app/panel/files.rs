@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use egui::RichText;
 
-use super::Panel;
+use super::{Panel, Place};
 use crate::app::preset_diff;
 use crate::app::session::{Command, Session, Status};
 use crate::scene::load;
@@ -19,6 +19,7 @@ impl Panel {
                 self.save(status);
             }
         });
+        self.message_ui(ui, Place::Save);
         ui.checkbox(&mut self.save_diff, "save as a diff")
             .on_hover_text(format!(
                 "extend = \"{}\" and only the changed keys; off: the whole preset",
@@ -29,12 +30,19 @@ impl Panel {
             if status.recording.is_some() {
                 if ui.button("Stop recording").clicked() {
                     session.send(Command::StopRecording);
-                    self.say(true, format!("recorded to {}", self.record_path));
+                    let path = status.recording.as_ref().map(|p| p.display().to_string());
+                    let path = path.unwrap_or_else(|| self.record_path.clone());
+                    self.say(Place::Record, true, format!("recorded to {path}"));
                 }
             } else if ui.button("Record").clicked() {
                 session.send(Command::StartRecording(PathBuf::from(&self.record_path)));
+                self.valid_input();
             }
         });
+        if let Some(path) = &status.recording {
+            ui.weak(format!("recording to {} (from frame 0)", path.display()));
+        }
+        self.message_ui(ui, Place::Record);
     }
 
     /// Writes the current preset (with the tuning) and checks it loads
@@ -59,15 +67,20 @@ impl Panel {
         };
         let text = diff.unwrap_or_else(|| format!("# {comment}\n{}", load::to_toml(preset)));
         if let Err(e) = std::fs::write(&path, text) {
-            return self.say(false, format!("cannot save to {path}: {e}"));
+            return self.say(Place::Save, false, format!("cannot save to {path}: {e}"));
         }
         match load::load(&path, &[]) {
-            Ok(l) if &l.preset == preset => self.say(true, format!("saved {path}")),
+            Ok(l) if &l.preset == preset => self.say(Place::Save, true, format!("saved {path}")),
             Ok(_) => self.say(
+                Place::Save,
                 false,
                 format!("saved {path}, but it loads back differently"),
             ),
-            Err(e) => self.say(false, format!("saved {path}, but it does not load: {e}")),
+            Err(e) => self.say(
+                Place::Save,
+                false,
+                format!("saved {path}, but it does not load: {e}"),
+            ),
         }
     }
 }

@@ -55,6 +55,13 @@ impl Panel {
     /// Takes the viewer's time cursor (on the current run) as the branch
     /// point, and a particle selected in the 3D view as the inspected one.
     pub(super) fn follow_viewer(&mut self, session: &Session, status: &Status) {
+        if status.run.recording_id != self.run_seen {
+            // A new run: the branch field follows its frame, not a time
+            // cursor or a frame of the run before.
+            self.run_seen = status.run.recording_id.clone();
+            self.branch_at = None;
+            self.branch_typed = false;
+        }
         let link = self.link.lock().expect("not poisoned").clone();
         if link.cursor_moves != self.seen.0 {
             self.seen.0 = link.cursor_moves;

@@ -47,6 +47,25 @@ pub use keys::{SHORTCUTS, take_simulation_keys};
 pub use link::ViewerLink;
 pub use status::error_text;
 
+/// Where in the panel a message belongs: beside the control it answers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Place {
+    Preset,
+    Solver,
+    Wind,
+    Set,
+    Save,
+    Record,
+}
+
+/// The answer to an edit or action.
+#[derive(Clone, Debug)]
+struct Message {
+    place: Place,
+    ok: bool,
+    text: String,
+}
+
 /// The panel's state between frames.
 pub struct Panel {
     tuning: Tuning,
@@ -60,7 +79,11 @@ pub struct Panel {
     save_path: String,
     record_path: String,
     set_text: String,
-    message: Option<(bool, String)>,
+    /// The answer to the last edit or action, shown beside its control
+    /// until the next valid input.
+    message: Option<Message>,
+    /// The run the panel last showed (a new run's branch field follows it).
+    run_seen: String,
     branch_frame: u64,
     branch_at: Option<BranchAt>,
     /// Whether the branch field had the keyboard focus last frame (it is
@@ -104,6 +127,7 @@ impl Panel {
             record_path: format!("{stem}_session.rrd"),
             set_text: String::new(),
             message: None,
+            run_seen: status.run.recording_id.clone(),
             branch_frame: 0,
             branch_at: None,
             branch_editing: false,
@@ -139,8 +163,14 @@ impl Panel {
         self.telemetry = preset.telemetry;
     }
 
-    fn say(&mut self, ok: bool, text: impl Into<String>) {
-        self.message = Some((ok, text.into()));
+    /// Answers an edit or action of the control at `place`: beside it, in
+    /// red if it was refused.
+    fn say(&mut self, place: Place, ok: bool, text: impl Into<String>) {
+        self.message = Some(Message {
+            place,
+            ok,
+            text: text.into(),
+        });
     }
 
     /// Draws the panel and sends what the user changed.

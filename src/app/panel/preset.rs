@@ -3,7 +3,7 @@
 
 use egui::RichText;
 
-use super::{Panel, error_text};
+use super::{Panel, Place, error_text};
 use crate::app::session::{Command, Session, Status};
 use crate::scene::{Override, Tuning, load, shipped};
 
@@ -37,6 +37,7 @@ impl Panel {
         if let Some(name) = chosen {
             self.load(session, name);
         }
+        self.message_ui(ui, Place::Preset);
     }
 
     fn load(&mut self, session: &Session, name: String) {
@@ -45,9 +46,9 @@ impl Panel {
                 self.sync(&loaded.preset);
                 self.open = name.clone();
                 session.send(Command::Load(Box::new(loaded), name.clone()));
-                self.say(true, format!("loaded {name}"));
+                self.say(Place::Preset, true, format!("loaded {name}"));
             }
-            Err(e) => self.say(false, error_text(&e)),
+            Err(e) => self.say(Place::Preset, false, error_text(&e)),
         }
     }
 
@@ -67,28 +68,33 @@ impl Panel {
         if apply {
             self.apply_set(session, status);
         }
+        self.message_ui(ui, Place::Set);
     }
 
     fn apply_set(&mut self, session: &Session, status: &Status) {
         let o: Override = match self.set_text.parse() {
             Ok(o) => o,
-            Err(e) => return self.say(false, e.to_string()),
+            Err(e) => return self.say(Place::Set, false, e.to_string()),
         };
         let Some(current) = &status.preset else {
             return;
         };
         match load::with_overrides(current, std::slice::from_ref(&o)) {
-            Err(e) => self.say(false, error_text(&e)),
+            Err(e) => self.say(Place::Set, false, error_text(&e)),
             Ok(loaded) => {
                 let live = Tuning::is_live(&o.key) || o.key.starts_with("telemetry.");
                 self.sync(&loaded.preset);
                 if live {
                     session.send(Command::Tune(self.tuning));
                     session.send(Command::Telemetry(self.telemetry));
-                    self.say(true, format!("set {}", o.key));
+                    self.say(Place::Set, true, format!("set {}", o.key));
                 } else {
                     session.send(Command::Load(Box::new(loaded), status.preset_name.clone()));
-                    self.say(true, format!("set {}; the scene restarted", o.key));
+                    self.say(
+                        Place::Set,
+                        true,
+                        format!("set {}; the scene restarted", o.key),
+                    );
                 }
             }
         }

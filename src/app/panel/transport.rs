@@ -97,6 +97,13 @@ impl Panel {
                 ui.label(format!("(time cursor {t:.2} s)"));
             }
         });
+        if let Some(e) = status
+            .error
+            .as_deref()
+            .filter(|e| super::status::is_branch_error(e))
+        {
+            ui.add(egui::Label::new(egui::RichText::new(e).color(super::status::RED)).wrap());
+        }
         if let Some((parent, _, frame)) = &status.run.parent
             && ui
                 .checkbox(&mut self.ghost, "parent as a ghost")

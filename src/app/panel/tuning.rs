@@ -3,7 +3,7 @@
 
 use egui::{RichText, Slider, SliderClamping};
 
-use super::Panel;
+use super::{Panel, Place};
 use crate::app::session::{Command, Session};
 use crate::scene::{
     Tuning,
@@ -14,17 +14,17 @@ use crate::solver::{Family, Params, Width};
 impl Panel {
     /// Sends the tuning if it validates (`Tuning::validate`), else restores
     /// the last good one and shows why.
-    fn commit(&mut self, session: &Session, before: Tuning) {
+    fn commit(&mut self, session: &Session, before: Tuning, place: Place) {
         if self.tuning == before {
             return;
         }
         match self.tuning.validate() {
             Ok(()) => {
                 session.send(Command::Tune(self.tuning));
-                self.message = None;
+                self.valid_input();
             }
             Err(e) => {
-                self.say(false, e.to_string());
+                self.say(place, false, e.to_string());
                 self.tuning = before;
             }
         }
@@ -79,7 +79,8 @@ impl Panel {
         ui.add(slider(iterations, 1..=50).clamping(free).text("iterations"));
         ui.add(slider(dt, 0.001..=0.05).clamping(free).text("Δt (s)"));
         ui.add(slider(substeps, 1..=32).clamping(free).text("substeps"));
-        self.commit(session, before);
+        self.commit(session, before, Place::Solver);
+        self.message_ui(ui, Place::Solver);
     }
 
     pub(super) fn wind_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
@@ -104,7 +105,8 @@ impl Panel {
         ui.add(slider(gust, 0.0..=20.0).text("gust (m/s)"));
         ui.add(slider(gust_period, 0.0..=10.0).text("gust period (s)"));
         ui.add(slider(sway, 0.0..=90.0).text("sway (°)"));
-        self.commit(session, before);
+        self.commit(session, before, Place::Wind);
+        self.message_ui(ui, Place::Wind);
     }
 
     pub(super) fn telemetry_ui(&mut self, ui: &mut egui::Ui, session: &Session) {
@@ -161,6 +163,7 @@ impl Panel {
         ui.add(slider(arrow_threshold, 0.0..=0.01).text("arrow threshold"));
         if self.telemetry != before {
             session.send(Command::Telemetry(self.telemetry));
+            self.valid_input();
         }
     }
 }

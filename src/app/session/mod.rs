@@ -14,6 +14,7 @@
 //! gets exactly one run, from its first message. A change of parameters
 //! applies at the next step and is logged at the frame it takes effect.
 
+pub mod follow;
 mod runs;
 pub mod trace;
 mod worker;
@@ -101,6 +102,27 @@ pub(crate) struct Shown {
     /// (the other frames' scalars only), so the viewer is never sent more
     /// than it shows.
     pub(crate) drawn: u64,
+    /// The viewer's time cursor, moved by the session while it plays.
+    pub(crate) follow: follow::Follow,
+}
+
+/// Where the viewer's time cursor is, for pacing the simulation
+/// ([`Session::viewer_shows`]).
+#[derive(Clone)]
+pub struct CursorReports(Arc<Mutex<Shown>>);
+
+impl CursorReports {
+    /// See [`Session::viewer_shows`].
+    pub fn shows(&self, recording: String, at: BranchAt) {
+        let mut shown = self.0.lock().expect("not poisoned");
+        let back = match (&shown.at, at) {
+            (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
+            (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
+            _ => false,
+        };
+        shown.follow.reported(&recording, at, back);
+        shown.at = (!back).then(|| (recording, at, Instant::now()));
+    }
 }
 
 /// Where a branch starts.
@@ -316,16 +338,26 @@ impl Session {
     /// (reported each time it moves). While it moves forward, following the
     /// stream, a paced simulation keeps no more than [`MAX_LEAD`] seconds
     /// ahead of it: it never runs ahead of what the viewer can take in and
-    /// draw. A cursor moved back (the user scrubbed) or standing still for
-    /// [`FOLLOWING`] (the viewer's timeline paused) does not hold it back.
+    /// draw. A cursor moved back (the user scrubbed), or on another
+    /// recording, does not hold it back, nor, unless the session moves the
+    /// cursor ([`follow`]), one standing still for [`FOLLOWING`] (the
+    /// viewer's timeline paused).
     pub fn viewer_shows(&self, recording: String, at: BranchAt) {
-        let mut shown = self.shown.lock().expect("not poisoned");
-        let back = match (&shown.at, at) {
-            (Some((id, BranchAt::Time(a), _)), BranchAt::Time(b)) => *id == recording && b < *a,
-            (Some((id, BranchAt::Frame(a), _)), BranchAt::Frame(b)) => *id == recording && b < *a,
-            _ => false,
-        };
-        shown.at = (!back).then(|| (recording, at, Instant::now()));
+        self.cursor_reports().shows(recording, at);
+    }
+
+    /// What the viewer's event callback reports the time cursor to, at once
+    /// (the panel, which also reads it, draws only at the next frame).
+    pub fn cursor_reports(&self) -> CursorReports {
+        CursorReports(self.shown.clone())
+    }
+
+    /// Has the simulation thread call `hook` after it has sent the whole
+    /// drawing of a frame, while it moves the viewer's time cursor
+    /// ([`follow`]): the window sends the viewer, after the frame's drawing,
+    /// a command to put the cursor on that frame.
+    pub fn on_whole_frame(&self, hook: impl Fn(&follow::WholeFrame) + Send + Sync + 'static) {
+        self.shown.lock().expect("not poisoned").follow.hook = Some(Arc::new(hook));
     }
 
     /// Has the simulation thread call `waker` after every change of the

@@ -36,7 +36,7 @@ impl Worker {
             drawn: false,
         });
         self.draw_ghost(true);
-        self.run.telemetry.send();
+        self.send_drawing();
     }
 
     /// Draws the parent at the current frame, if the run draws this frame

@@ -5,6 +5,7 @@
 mod ghost;
 mod lifecycle;
 mod publish;
+mod send;
 
 use std::path::PathBuf;
 use std::sync::mpsc::Receiver;
@@ -150,17 +151,21 @@ impl Worker {
                 self.stop_at = None;
                 self.publish_progress();
             }
-            if !self.playing && self.drawing_behind {
-                // Stopped on a frame sent without its drawing: send it.
+            let behind = self.playing && self.viewer_behind();
+            if self.drawing_behind && (!self.playing || behind) {
+                // Stopped, or waiting for the viewer, on a frame sent
+                // without its drawing: send it (the viewer's cursor goes
+                // only to frames drawn whole, so waiting for it to reach a
+                // frame never drawn would wait for ever).
                 self.drawing_behind = false;
                 self.run.telemetry.set_visuals(true);
                 if let Err(e) = self.run.telemetry.redraw(&self.run.scene) {
                     self.set_error(Some(format!("logging to the viewer failed: {e}")));
                 }
                 self.draw_ghost(false);
-                self.run.telemetry.send();
+                self.send_drawing();
             }
-            if self.playing && self.viewer_behind() {
+            if behind {
                 // Wait for the viewer; then go on at the usual pace, without
                 // catching up.
                 std::thread::sleep(Duration::from_millis(2));
@@ -189,12 +194,14 @@ impl Worker {
     fn handle(&mut self, c: Command) {
         match c {
             Command::Play => {
+                self.take_cursor();
                 self.playing = true;
                 self.stop_at = None;
                 self.next_step = Instant::now();
                 self.await_viewer();
             }
             Command::PlayTo(frame) => {
+                self.take_cursor();
                 self.playing = self.run.scene.frame() < frame;
                 self.stop_at = Some(frame);
                 self.next_step = Instant::now();
@@ -202,6 +209,7 @@ impl Worker {
             }
             Command::Pause => self.playing = false,
             Command::Step => {
+                self.take_cursor();
                 self.playing = false;
                 self.step();
             }
@@ -272,7 +280,7 @@ impl Worker {
             Command::Ghost(on) => {
                 self.show_ghost = on;
                 self.draw_ghost(true);
-                self.run.telemetry.send();
+                self.send_drawing();
             }
             Command::Grab(at) => {
                 let at = glam::Vec3::from_array(at).as_dvec3() + self.seen_to_now();
@@ -324,13 +332,30 @@ impl Worker {
     }
 
     /// Whether the viewer, following the current run, shows a frame more
-    /// than [`MAX_LEAD`] seconds behind the simulation's.
+    /// than [`MAX_LEAD`] seconds behind the simulation's. While the session
+    /// moves the viewer's cursor, a cursor that has not moved for a while is
+    /// a viewer slow to take in and draw what it was sent, which the
+    /// simulation waits for however long it takes; left to the viewer, it
+    /// may be one the user stopped.
+    ///
+    /// A viewer that reports nothing at all for [`FOLLOWING`] while the
+    /// session moves its cursor (one that does not take the commands)
+    /// lets one frame through each time, so the simulation crawls rather
+    /// than stops.
     fn viewer_behind(&self) -> bool {
-        let shown = self.shown.lock().expect("not poisoned");
-        let Some((id, at, when)) = shown.at.as_ref().filter(|_| shown.pace) else {
+        let mut shown = self.shown.lock().expect("not poisoned");
+        let following = shown.follow.is_on();
+        let pace = shown.pace;
+        let Some((id, at, when)) = shown.at.as_mut().filter(|_| pace) else {
             return false;
         };
-        if *id != self.info.recording_id || when.elapsed() > FOLLOWING {
+        if *id != self.info.recording_id {
+            return false;
+        }
+        if when.elapsed() > FOLLOWING {
+            if following {
+                *when = Instant::now();
+            }
             return false;
         }
         let frame = match *at {
@@ -411,7 +436,7 @@ impl Worker {
                 self.draw_ghost(false);
                 if draws {
                     // The frame's drawing, the ghost with it, sent whole.
-                    self.run.telemetry.send();
+                    self.send_drawing();
                 }
             }
             Err(e) => {
