@@ -15,7 +15,7 @@ use weft::solver::Family;
 use weft::telemetry::{paths, read};
 
 mod common;
-use common::panel::{State, WAIT, harness, set_slider, state_with};
+use common::panel::{State, WAIT, harness, logged_frames, set_slider, state_with};
 
 fn state(preset: &str) -> State {
     state_with(preset, &[])
@@ -1391,22 +1391,10 @@ fn a_paced_window_is_sent_a_drawing_per_frame_it_draws() {
         loaded,
         "hanging_sheet".into(),
         move |msg: &rerun::log::LogMsg| {
-            let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg else {
-                return;
-            };
-            if !store.is_recording() {
-                return;
+            if let Some((_, entity, frames)) = logged_frames(msg) {
+                let mut logged = sink.lock().unwrap();
+                logged.entry(entity).or_default().extend(frames);
             }
-            let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
-            let Some(frames) = chunk.timelines().get(&paths::FRAME.into()) else {
-                return;
-            };
-            let entity = chunk.entity_path().to_string();
-            let mut logged = sink.lock().unwrap();
-            logged
-                .entry(entity)
-                .or_default()
-                .extend(frames.times_raw().iter().copied());
         },
     )
     .unwrap();

@@ -12,7 +12,7 @@ use weft::scene::load;
 use weft::telemetry::paths;
 
 mod common;
-use common::panel::WAIT;
+use common::panel::{WAIT, logged_frames};
 
 /// What reached the window, in order: a chunk of an entity at frames, or
 /// the cursor put on a frame.
@@ -29,21 +29,11 @@ fn session(preset: &str, set: &[&str]) -> (Session, Arc<Mutex<Vec<Sent>>>) {
     let set: Vec<_> = set.iter().map(|s| s.parse().unwrap()).collect();
     let loaded = load::load(preset, &set).unwrap();
     let session = Session::start(loaded, preset.into(), move |msg: &rerun::log::LogMsg| {
-        let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg else {
-            return;
-        };
-        if !store.is_recording() {
-            return;
+        if let Some((recording, entity, frames)) = logged_frames(msg) {
+            sink.lock()
+                .unwrap()
+                .push(Sent::Chunk(recording, entity, frames));
         }
-        let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
-        let Some(frames) = chunk.timelines().get(&paths::FRAME.into()) else {
-            return;
-        };
-        sink.lock().unwrap().push(Sent::Chunk(
-            store.recording_id().to_string(),
-            chunk.entity_path().to_string(),
-            frames.times_raw().to_vec(),
-        ));
     })
     .unwrap();
     let sink = sent.clone();

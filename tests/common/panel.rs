@@ -66,3 +66,24 @@ pub fn step_to(session: &Session, frame: u64) -> String {
     );
     session.status().digest
 }
+
+/// A recording's data message as its recording id, entity path and the
+/// frames it was logged at (`None` for anything else: the blueprint, a
+/// message without the frame timeline).
+pub fn logged_frames(msg: &rerun::log::LogMsg) -> Option<(String, String, Vec<i64>)> {
+    let rerun::log::LogMsg::ArrowMsg(store, arrow) = msg else {
+        return None;
+    };
+    if !store.is_recording() {
+        return None;
+    }
+    let chunk = rerun::log::Chunk::from_arrow_msg(arrow).unwrap();
+    let frames = chunk
+        .timelines()
+        .get(&weft::telemetry::paths::FRAME.into())?;
+    Some((
+        store.recording_id().to_string(),
+        chunk.entity_path().to_string(),
+        frames.times_raw().to_vec(),
+    ))
+}
