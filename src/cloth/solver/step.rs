@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, Vec3};
 
 use super::adjust::{Adjust, Colliders, LayerFriction};
-use super::collision::{self, Contact, Pose};
+use super::collision::{self, Collider, Contact, Pose};
 use super::diagnostics;
 use super::families::{Family, Sets, Sweep};
 use super::forced_rotation::ForcedRotation;
@@ -26,6 +26,48 @@ macro_rules! grid {
             topology: &$solver.topology,
             spec: &$solver.spec,
             inv_mass: &$solver.inv_mass,
+        }
+    };
+}
+
+/// The colliders' push of free particles, timed when `spent` is: the
+/// solver's fields it needs, borrowed apart from the positions it moves.
+struct PushOut<'a> {
+    colliders: &'a [Collider],
+    poses: &'a [Pose],
+    inv_mass: &'a [f32],
+    contacts: &'a mut [Contact],
+    margin: f32,
+    spent: Option<Duration>,
+}
+
+impl PushOut<'_> {
+    /// Pushes every free particle of `x` out of every collider; whether it
+    /// moved one.
+    fn push(&mut self, x: &mut [Vec3]) -> bool {
+        if self.colliders.is_empty() {
+            return false;
+        }
+        let start = self.spent.is_some().then(Instant::now);
+        let (colliders, poses, margin) = (self.colliders, self.poses, self.margin);
+        let moved = collision::project(x, self.inv_mass, colliders, poses, margin, self.contacts);
+        if let (Some(spent), Some(start)) = (self.spent.as_mut(), start) {
+            *spent += start.elapsed();
+        }
+        moved
+    }
+}
+
+/// A [`PushOut`] of the solver's colliders at the substep's end.
+macro_rules! push_out {
+    ($solver:expr, $margin:expr) => {
+        PushOut {
+            colliders: &$solver.colliders,
+            poses: &$solver.collider_to,
+            inv_mass: &$solver.inv_mass,
+            contacts: &mut $solver.contacts,
+            margin: $margin,
+            spent: $solver.diagnostics.is_some().then_some(Duration::ZERO),
         }
     };
 }
@@ -344,44 +386,30 @@ impl Solver {
     /// the colliders' push (timed with the colliders) as its last word.
     fn end_self_collision_substep(&mut self, pulled: Option<usize>, margin: f32) {
         let grid = grid!(self);
-        let (colliders, poses) = (&self.colliders, &self.collider_to);
-        let (contacts, inv_mass) = (&mut self.contacts, &self.inv_mass);
-        let mut spent = self.diagnostics.is_some().then_some(Duration::ZERO);
-        let push = |x: &mut [Vec3]| {
-            if colliders.is_empty() {
-                return false;
-            }
-            let start = spent.is_some().then(Instant::now);
-            let moved = collision::project(x, inv_mass, colliders, poses, margin, contacts);
-            if let (Some(spent), Some(start)) = (spent.as_mut(), start) {
-                *spent += start.elapsed();
-            }
-            moved
-        };
+        let mut colliders = push_out!(self, margin);
         self.self_collision
-            .end_substep(grid, &mut self.state.position, pulled, push);
-        if let (Some(d), Some(spent)) = (self.diagnostics.as_deref_mut(), spent) {
-            d.timings.collisions += spent;
-        }
+            .end_substep(grid, &mut self.state.position, pulled, |x| {
+                colliders.push(x)
+            });
+        let spent = colliders.spent;
+        self.charge_spent(spent);
     }
 
     /// Pushes every free particle out of every collider (timed in
     /// diagnostics). Returns whether it moved a particle.
     pub(in crate::solver) fn project_colliders(&mut self, margin: f32) -> bool {
-        if self.colliders.is_empty() {
-            return false;
-        }
-        let t = self.stopwatch();
-        let moved = collision::project(
-            &mut self.state.position,
-            &self.inv_mass,
-            &self.colliders,
-            &self.collider_to,
-            margin,
-            &mut self.contacts,
-        );
-        self.charge(t, |d| &mut d.timings.collisions);
+        let mut colliders = push_out!(self, margin);
+        let moved = colliders.push(&mut self.state.position);
+        let spent = colliders.spent;
+        self.charge_spent(spent);
         moved
+    }
+
+    /// Adds a collider push's time to the diagnostics' timings.
+    fn charge_spent(&mut self, spent: Option<Duration>) {
+        if let (Some(d), Some(spent)) = (self.diagnostics.as_deref_mut(), spent) {
+            d.timings.collisions += spent;
+        }
     }
 
     /// Before the first step: every free particle, and the reference motion

@@ -323,7 +323,7 @@ impl SelfCollision {
         self.target = cleared;
     }
 
-    /// **Step's end** (and wherever tangles are needed): which particles
+    /// **Step's end**, for the diagnostics: which particles
     /// are tangled at `x`, and where each (edge, triangle) pair crosses.
     pub(crate) fn tangles(&mut self, grid: Grid, x: &[Vec3]) -> Vec<Vec3> {
         self.timed(
