@@ -26,13 +26,39 @@ fn share(img: &image::RgbaImage, x: (f32, f32), y: (f32, f32), f: impl Fn([u8; 4
     hits as f32 / ((x1 - x0) * (y1 - y0)) as f32
 }
 
+/// What a window test says when Xvfb is missing.
+const NEEDS_XVFB: &str = "xvfb-run (Debian: apt-get install xvfb xauth) runs the window test";
+
+/// `weft` under a fresh Xvfb screen, run in `dir` (its arguments to add),
+/// with `dir` as its home: no layout a person's own window saved (the
+/// viewer's blueprints) reaches the test.
+fn weft_in_xvfb(dir: &std::path::Path) -> Command {
+    let mut c = Command::new("xvfb-run");
+    c.args(["-a", "-s", "-screen 0 1600x1000x24"])
+        .arg(env!("CARGO_BIN_EXE_weft"))
+        .env_remove("WAYLAND_DISPLAY")
+        .env("HOME", dir)
+        .env("XDG_DATA_HOME", dir)
+        .env("XDG_CONFIG_HOME", dir)
+        .current_dir(dir);
+    c
+}
+
+/// `weft ARGS` with no display at all: what fails before a window opens.
+fn weft_without_display(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn the_window_shows_the_cloth_and_the_panel() {
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("window.png");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1600x1000x24"])
-        .arg(env!("CARGO_BIN_EXE_weft"))
+    let out = weft_in_xvfb(dir.path())
         .args([
             "gui",
             "flag_on_car",
@@ -42,10 +68,8 @@ fn the_window_shows_the_cloth_and_the_panel() {
         .arg("--screenshot")
         .arg(&shot)
         .args(["--frames", "300", "--burst", "4"])
-        .env_remove("WAYLAND_DISPLAY")
-        .current_dir(dir.path())
         .output()
-        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+        .expect(NEEDS_XVFB);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         out.status.success(),
@@ -166,15 +190,11 @@ fn every_shipped_preset_opens_on_its_whole_cloth() {
     let mut report = Vec::new();
     for preset in weft::scene::shipped::ALL {
         let shot = dir.path().join(format!("{}.png", preset.name));
-        let out = Command::new("xvfb-run")
-            .args(["-a", "-s", "-screen 0 1600x1000x24"])
-            .arg(env!("CARGO_BIN_EXE_weft"))
+        let out = weft_in_xvfb(dir.path())
             .args(["gui", preset.name, "--screenshot"])
             .arg(&shot)
-            .env_remove("WAYLAND_DISPLAY")
-            .current_dir(dir.path())
             .output()
-            .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+            .expect(NEEDS_XVFB);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(out.status.success(), "{}: {stderr}", preset.name);
         let img = image::open(&shot).unwrap().to_rgba8();
@@ -216,12 +236,7 @@ fn every_shipped_preset_opens_on_its_whole_cloth() {
 /// window opens, naming the key and suggesting the nearest one.
 #[test]
 fn gui_set_is_validated_before_the_window_opens() {
-    let out = Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(["gui", "flag_on_car", "--set", "solver.weights.curvatre=0.3"])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .unwrap();
+    let out = weft_without_display(&["gui", "flag_on_car", "--set", "solver.weights.curvatre=0.3"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--set solver.weights.curvatre"), "{stderr}");
@@ -237,12 +252,7 @@ fn gui_memory_limit_is_validated_before_the_window_opens() {
         ("50MB", "under 100MB the viewer would drop every frame"),
         ("120%", "percentage must be between 0 and 100"),
     ] {
-        let out = Command::new(env!("CARGO_BIN_EXE_weft"))
-            .args(["gui", "--memory-limit", limit])
-            .env_remove("DISPLAY")
-            .env_remove("WAYLAND_DISPLAY")
-            .output()
-            .unwrap();
+        let out = weft_without_display(&["gui", "--memory-limit", limit]);
         assert_eq!(out.status.code(), Some(2), "{limit}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(
@@ -318,7 +328,7 @@ fn an_idle_window_stays_flat_and_cheap() {
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+        .expect(NEEDS_XVFB);
     let started = Instant::now();
     let pid = loop {
         if let Ok(p) = std::fs::read_to_string(&pid_file)
@@ -406,17 +416,13 @@ fn weft_view_opens_a_recording_with_its_layout() {
         .unwrap();
     assert!(rec.status.success(), "{rec:?}");
     let shot = dir.path().join("view.png");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1600x1000x24"])
-        .arg(env!("CARGO_BIN_EXE_weft"))
+    let out = weft_in_xvfb(dir.path())
         .arg("view")
         .arg(&rrd)
         .arg("--screenshot")
         .arg(&shot)
-        .env_remove("WAYLAND_DISPLAY")
-        .current_dir(dir.path())
         .output()
-        .expect("xvfb-run (Debian: apt-get install xvfb xauth) runs the window test");
+        .expect(NEEDS_XVFB);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "weft view failed:\n{stderr}");
     assert!(stderr.contains("saved the window"), "{stderr}");
